@@ -1,0 +1,105 @@
+"""The simulator: one robot in one world, stepped by MJX with the track-contact model."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from mujoco import mjx
+from mujoco.mjx._src import collision_driver, constraint, forward, smooth, solver
+
+from mjx_tracks.layout import Layout, resolve_layout
+from mjx_tracks.physics import PhysicsConfig, compile_model
+from mjx_tracks.robots.spec import RobotSpec
+from mjx_tracks.tracks import TrackModel, apply_belt_contacts, aref_shift
+
+
+def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array) -> mjx.Data:
+  """One physics substep: mjx.forward with the belt contacts of the track model, then integrate."""
+  d = smooth.kinematics(m, d)
+  d = smooth.com_pos(m, d)
+  d = smooth.camlight(m, d)
+  d = smooth.tendon(m, d)
+  d = smooth.crb(m, d)
+  d = smooth.tendon_armature(m, d)
+  d = smooth.factor_m(m, d)
+  d = collision_driver.collision(m, d)
+  d, slip = apply_belt_contacts(m, d, tm, belt_speeds)
+  d = constraint.make_constraint(m, d)
+  d = d.tree_replace({"_impl.efc_aref": d._impl.efc_aref + aref_shift(m, d, tm, slip)})
+  d = smooth.transmission(m, d)
+  d = forward.fwd_velocity(m, d)
+  d = forward.fwd_actuation(m, d)
+  d = forward.fwd_acceleration(m, d)
+  d = solver.solve(m, d)
+  return forward.implicit(m, d)
+
+
+@dataclasses.dataclass(frozen=True)
+class Simulator:
+  """A compiled robot + world; pure step functions, nothing changes after construction."""
+
+  robot: RobotSpec
+  physics: PhysicsConfig
+  mj_model: mujoco.MjModel
+  model: mjx.Model
+  layout: Layout
+  tracks: TrackModel
+
+  @staticmethod
+  def create(robot: RobotSpec, world_xml: str, physics: PhysicsConfig = PhysicsConfig(),
+             step_prefix: str = "step") -> "Simulator":
+    mj_model = compile_model(robot, world_xml, physics)
+    layout = resolve_layout(mj_model, robot, step_prefix)
+    tracks = TrackModel.create(mj_model, layout, robot.mu_along, robot.mu_across,
+                               robot.track_separation, robot.steering_efficiency)
+    return Simulator(robot, physics, mj_model, mjx.put_model(mj_model, impl="jax"), layout, tracks)
+
+  def with_steps(self, step_pos: jax.Array, step_size: jax.Array) -> mjx.Model:
+    """The model with this environment's step boxes (centres, half-sizes in m) swapped in."""
+    ids = jnp.asarray(self.layout.step_geoms)
+    m = self.model
+    return m.replace(
+        geom_pos=m.geom_pos.at[ids].set(step_pos),
+        geom_size=m.geom_size.at[ids].set(step_size),
+        geom_rbound=m.geom_rbound.at[ids].set(jnp.linalg.norm(step_size, axis=-1)),
+    )
+
+  def init_data(self, pos: jax.Array, yaw: jax.Array, joint_angles: jax.Array | None = None) -> mjx.Data:
+    """Data with the chassis resting at ground point pos (m) with heading yaw (rad)."""
+    d = mjx.make_data(self.model, impl="jax")
+    qpos = d.qpos.at[0:3].set(pos + jnp.array([0.0, 0.0, self.robot.spawn_height + 0.005]))
+    qpos = qpos.at[3:7].set(jnp.stack([jnp.cos(yaw / 2), 0.0, 0.0, jnp.sin(yaw / 2)]))
+    if joint_angles is not None:
+      qpos = qpos.at[self.layout.joint_qpos].set(joint_angles)
+      d = d.replace(ctrl=joint_angles)
+    return d.replace(qpos=qpos)
+
+  def substep(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array) -> mjx.Data:
+    """One physics step of timestep seconds with the given belt speeds (m/s, order of BELTS)."""
+    return step_with_tracks(m, d, self.tracks, belt_speeds)
+
+  def advance(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, joint_targets: jax.Array,
+              n_substeps: int) -> mjx.Data:
+    """Sets the joint servo targets (rad), then runs n_substeps physics steps."""
+    d = d.replace(ctrl=joint_targets)
+    return jax.lax.fori_loop(0, n_substeps, lambda _, x: self.substep(m, x, belt_speeds), d)
+
+  def plain_step(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:
+    """mjx.step without the track model (benchmark baseline)."""
+    return mjx.step(m, d)
+
+
+def staircase_simulator(robot: RobotSpec, physics: PhysicsConfig = PhysicsConfig(),
+                        n_max: int | None = None) -> Simulator:
+  """A simulator of the robot in the staircase world (pool of step boxes)."""
+  from scenes import staircase
+  return Simulator.create(robot, staircase.world_xml(n_max or staircase.N_MAX), physics)
+
+
+def joint_angles(sim: Simulator, d: mjx.Data) -> jax.Array:
+  """Flipper and arm joint angles (rad)."""
+  return d.qpos[np.asarray(sim.layout.joint_qpos)]
