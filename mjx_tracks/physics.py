@@ -17,7 +17,7 @@ class PhysicsConfig:
   timestep: float = 0.01  # s, one physics substep
   solver_iterations: int = 4  # Newton iterations
   ls_iterations: int = 6  # line-search iterations
-  impratio: float = 1.0
+  impratio: float = 1.0  # friction-to-normal impedance ratio
 
   def validate(self) -> None:
     if not 0.0005 <= self.timestep <= 0.02:

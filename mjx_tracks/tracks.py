@@ -19,10 +19,13 @@ s_i = t_i . (v2 - v1) instead of 0, where v2 - v1 = +u_vec if the belt is geom 1
 -u_vec if it is geom 2.
 
 Steering efficiency e (fraction of the differential belt speed that turns the robot): a contact at
-lateral offset y_c from the chassis centre is driven at v_bar + e * (u_b - v_bar) * |y_c| / (S/2),
-with v_bar the mean of the two side tracks' speeds and S the track separation. The targets of
-all contacts are then those of one rigid motion with forward speed v_bar and yaw rate
-e * (u_right - u_left) / S: the reference's steering-efficiency relation.
+lateral offset y_c from the chassis centre is driven along the belt at
+v_bar + e * (u_b - v_bar) * |y_c| / (S/2), with v_bar the mean of the two side tracks' speeds and
+S the track separation, and across the belt at the skid velocity Omega * x_c of the turn
+(x_c its longitudinal offset). The targets of all contacts are then those of one rigid motion
+with forward speed v_bar and yaw rate Omega = e * (u_right - u_left) / S, the reference's
+steering-efficiency relation; friction acts on deviations from it. Without the skid term,
+lateral sliding would use up the friction pyramid and the robot would turn at ~70 % of Omega.
 """
 
 from __future__ import annotations
@@ -68,7 +71,11 @@ def _normalize(x: jax.Array, eps: float = 1e-9) -> tuple[jax.Array, jax.Array]:
 
 
 def contact_belt_velocity(m, d, tm: TrackModel, belt_speeds: jax.Array):
-  """Per contact: belt index (-1 none), sign of the belt in the pair, belt surface velocity (world)."""
+  """Per contact: on-belt mask, sign of the belt in the pair, belt direction, target velocity.
+
+  The target velocity (world, m/s) is that of the belt surface relative to its body, plus the
+  turn's lateral skid: the ground moves at it relative to the robot's contact point.
+  """
   c = d._impl.contact
   geom_belt = jnp.asarray(tm.geom_belt)
   b1, b2 = geom_belt[c.geom[:, 0]], geom_belt[c.geom[:, 1]]
@@ -90,17 +97,20 @@ def contact_belt_velocity(m, d, tm: TrackModel, belt_speeds: jax.Array):
 
   # steering efficiency: scale each contact's differential speed by its lateral arm
   v_bar = 0.5 * (belt_speeds[0] + belt_speeds[1])
-  chassis_y = d.xmat[tm.chassis_body][:, 1]
-  y_c = jnp.abs((c.pos - d.xpos[tm.chassis_body]) @ chassis_y)
-  gain = tm.steering_efficiency * y_c / (0.5 * tm.track_separation)
+  omega = tm.steering_efficiency * (belt_speeds[1] - belt_speeds[0]) / tm.track_separation
+  chassis = d.xmat[tm.chassis_body]
+  offset = c.pos - d.xpos[tm.chassis_body]
+  x_c, y_c = offset @ chassis[:, 0], offset @ chassis[:, 1]
+  gain = tm.steering_efficiency * jnp.abs(y_c) / (0.5 * tm.track_separation)
   speed = v_bar + gain * (belt_speeds[belt_idx] - v_bar)
-  return belt, on_belt, sign, u_dir, speed
+  skid = -(omega * x_c)[:, None] * chassis[:, 1]
+  return on_belt, sign, u_dir, speed[:, None] * u_dir + skid
 
 
 def apply_belt_contacts(m, d, tm: TrackModel, belt_speeds: jax.Array):
   """Turns belt contacts' frames and friction; returns (data, per-contact target slips (ncon, 2))."""
   c = d._impl.contact
-  _, on_belt, sign, u_dir, speed = contact_belt_velocity(m, d, tm, belt_speeds)
+  on_belt, sign, u_dir, target = contact_belt_velocity(m, d, tm, belt_speeds)
   n = c.frame[:, 0]
   t1, t1_norm = _normalize(u_dir - jnp.sum(u_dir * n, -1, keepdims=True) * n)
   valid = on_belt & (t1_norm > 1e-3)  # a belt seen edge-on (side face) keeps isotropic friction
@@ -108,7 +118,7 @@ def apply_belt_contacts(m, d, tm: TrackModel, belt_speeds: jax.Array):
   frame = jnp.where(valid[:, None, None], jnp.stack([n, t1, t2], axis=1), c.frame)
   mu = jnp.array([tm.mu_along, tm.mu_across])
   friction = jnp.where(valid[:, None], c.friction.at[:, :2].set(mu), c.friction)
-  u_vec = (sign * speed)[:, None] * u_dir
+  u_vec = sign[:, None] * target
   slip = jnp.stack([jnp.sum(u_vec * t1, -1), jnp.sum(u_vec * t2, -1)], axis=-1)
   slip = jnp.where(valid[:, None], slip, 0.0)
   d = d.tree_replace({"_impl.contact": c.replace(frame=frame, friction=friction)})

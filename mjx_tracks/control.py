@@ -1,0 +1,114 @@
+"""Low-level control: one action vector -> belt speeds and flipper / arm joint targets.
+
+Actions are normalized to [-1, 1] per dimension (NaN -> 0, then clipped) and mapped to:
+  v     forward speed, linearly onto [v_min, v_max] m/s
+  w     yaw rate, onto [-max_yaw_rate, max_yaw_rate] rad/s
+  joint absolute target: onto [lower, upper] limit (rad);
+        increment: onto [-INCREMENT, INCREMENT] rad, accumulated into the previous target
+Joint targets are always clipped to the joint limits. Belt speeds follow the reference's
+skid-steer relation u = v -+ w S / (2 e) (left, right), flipper belts as their side, clipped to
++-max_speed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from mjx_tracks.layout import BELT_SIDE
+from mjx_tracks.robots.spec import RobotSpec
+
+INCREMENT = math.pi / 10  # rad per control step, the original's flipper / arm increment
+
+# Action dimensions of each control mode (paper Section 4 and 5).
+CONTROL_MODES: dict[str, tuple[str, ...]] = {
+    "4dof": ("v", "w", "front", "rear"),
+    "6dof": ("v", "w", "front_left", "front_right", "rear_left", "rear_right"),
+    "8dof": ("v", "w", "front_left", "front_right", "rear_left", "rear_right", "arm_1", "arm_2"),
+    "5dof_stairs": ("v", "front", "rear", "arm_1", "arm_2"),
+}
+
+# Which joints an action dimension drives (joint order: fl, fr, rl, rr, arm_1, arm_2).
+_DRIVES = {
+    "front": (0, 1), "rear": (2, 3),
+    "front_left": (0,), "front_right": (1,), "rear_left": (2,), "rear_right": (3,),
+    "arm_1": (4,), "arm_2": (5,),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Controller:
+  """Static mapping of one control mode for one robot."""
+
+  mode: str
+  dims: tuple[str, ...]
+  drive: np.ndarray  # (n_joints, n_action) 0/1: action dim -> joint
+  joint_limits: np.ndarray  # (n_joints, 2) rad
+  v_range: tuple[float, float]  # m/s
+  max_yaw_rate: float  # rad/s
+  increments: bool
+  track_separation: float  # m
+  steering_efficiency: float
+  max_speed: float  # m/s
+
+  @staticmethod
+  def create(robot: RobotSpec, mode: str, increments: bool = True,
+             v_range: tuple[float, float] = (0.0, 1.0)) -> "Controller":
+    if mode not in CONTROL_MODES:
+      raise ValueError(f"unknown control mode {mode!r}; known: {sorted(CONTROL_MODES)}")
+    dims = CONTROL_MODES[mode]
+    n_joints = len(robot.joint_names())
+    if any(d.startswith("arm") for d in dims) and not robot.has_arm:
+      raise ValueError(f"control mode {mode!r} drives an arm, but robot {robot.name!r} has none")
+    lo, hi = v_range
+    if not -robot.max_speed <= lo < hi <= robot.max_speed:
+      raise ValueError(f"v_range {v_range} must lie inside +-{robot.max_speed} m/s with min < max")
+    drive = np.zeros((n_joints, len(dims)), np.float32)
+    for a, name in enumerate(dims):
+      for j in _DRIVES.get(name, ()):
+        drive[j, a] = 1.0
+    return Controller(mode, dims, drive, robot.joint_limits(), tuple(v_range), robot.max_yaw_rate,
+                      increments, robot.track_separation, robot.steering_efficiency,
+                      robot.max_speed)
+
+  @property
+  def action_size(self) -> int:
+    return len(self.dims)
+
+  def _dim(self, action: jax.Array, name: str, default: float = 0.0) -> jax.Array:
+    return action[self.dims.index(name)] if name in self.dims else jnp.asarray(default)
+
+  def decode(self, action: jax.Array, prev_targets: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Normalized action -> (v m/s, w rad/s, joint targets rad)."""
+    a = jnp.clip(jnp.where(jnp.isfinite(action), action, 0.0), -1.0, 1.0)
+    lo, hi = self.v_range
+    v = lo + (self._dim(a, "v", -1.0) + 1.0) * 0.5 * (hi - lo)
+    w = self._dim(a, "w") * self.max_yaw_rate
+    drive = jnp.asarray(self.drive)
+    driven = drive.sum(axis=1) > 0
+    cmd = drive @ a
+    lim_lo, lim_hi = jnp.asarray(self.joint_limits[:, 0]), jnp.asarray(self.joint_limits[:, 1])
+    if self.increments:
+      target = prev_targets + cmd * INCREMENT
+    else:
+      target = lim_lo + (cmd + 1.0) * 0.5 * (lim_hi - lim_lo)
+    target = jnp.where(driven, target, prev_targets)
+    return v, w, jnp.clip(target, lim_lo, lim_hi)
+
+  def belt_speeds(self, v: jax.Array, w: jax.Array) -> jax.Array:
+    """(v, w) -> speeds of the 6 belts (m/s): left/right tracks, then the four flippers."""
+    return command_belt_speeds(v, w, self.track_separation, self.steering_efficiency, self.max_speed)
+
+
+def command_belt_speeds(v, w, track_separation: float, steering_efficiency: float,
+                        max_speed: float) -> jax.Array:
+  """Skid steer: u_side = v - side * w S / (2 e) ... with side +1 left (slower when turning left)."""
+  v = jnp.where(jnp.isfinite(v), v, 0.0)
+  w = jnp.where(jnp.isfinite(w), w, 0.0)
+  diff = w * track_separation / (2.0 * steering_efficiency)
+  u = v - jnp.asarray(BELT_SIDE) * diff
+  return jnp.clip(u, -max_speed, max_speed)

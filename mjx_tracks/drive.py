@@ -1,0 +1,175 @@
+"""Drive one robot on one staircase by script or keyboard; write its trajectory and a summary.
+
+python -m mjx_tracks.drive --robot 1 --stairs 0.17,0.30,7 --direction up --seconds 20 \
+    [--controller scripted|keyboard] [--out traj.json] [--video out.mp4]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from mjx_tracks.control import command_belt_speeds
+from mjx_tracks.pose import chassis_rpy, tipped_over
+from mjx_tracks.robots import get_robot
+from mjx_tracks.scripted import StairScript
+from mjx_tracks.sim import Simulator, staircase_simulator
+from scenes import staircase as sc
+
+
+@dataclasses.dataclass(frozen=True)
+class DriveSetup:
+  """One drive: robot on one staircase, start pose from the direction."""
+
+  sim: Simulator
+  stairs: sc.Staircase
+  direction: str  # "up" | "down"
+  control_period: float  # s
+
+  @property
+  def substeps(self) -> int:
+    return max(1, round(self.control_period / self.sim.physics.timestep))
+
+  def model(self):
+    return self.sim.with_steps(*sc.step_boxes(self.stairs))
+
+  def goal(self):
+    """Goal point (m): past the top edge going up, before the first riser going down."""
+    return (sc.ascent_goal if self.direction == "up" else sc.descent_goal)(self.stairs)
+
+  def initial_data(self):
+    spawn = sc.ascent_spawn if self.direction == "up" else sc.descent_spawn
+    pos, yaw = spawn(self.stairs)
+    return self.sim.init_data(pos, yaw, jnp.zeros(self.sim.layout.n_joints))
+
+
+def parse_stairs(text: str) -> sc.Staircase:
+  """'H,L,N' (riser m, tread m, steps) -> Staircase, with range checks."""
+  try:
+    h, l, n = text.split(",")
+    h, l, n = float(h), float(l), int(n)
+  except ValueError:
+    raise SystemExit(f"error: --stairs must be H,L,N (riser m, tread m, steps), got {text!r}")
+  if not (0.0 < h <= 0.4 and 0.1 <= l <= 1.0 and 1 <= n <= sc.N_MAX):
+    raise SystemExit(f"error: --stairs out of range: need 0 < H <= 0.4, 0.1 <= L <= 1.0, "
+                     f"1 <= N <= {sc.N_MAX}; got H={h}, L={l}, N={n}")
+  return sc.Staircase(jnp.float32(l), jnp.float32(h), jnp.int32(n))
+
+
+def scripted_rollout(setup: DriveSetup, n_steps: int) -> np.ndarray:
+  """Runs the scripted controller for n_steps control periods; returns qpos (n_steps + 1, nq)."""
+  sim, robot = setup.sim, setup.sim.robot
+  script = StairScript(setup.direction)
+  m = setup.model()
+  goal_x = setup.goal()[0]
+  ahead = 1.0 if setup.direction == "up" else -1.0  # +x is up the stairs
+
+  def control_step(d, _):
+    nose_up = -chassis_rpy(d.qpos)[1]
+    speed, targets = script.command(robot, nose_up)
+    speed = jnp.where(ahead * (d.qpos[0] - goal_x) >= 0.0, 0.0, speed)  # stop at the goal
+    belts = command_belt_speeds(speed, 0.0, robot.track_separation, robot.steering_efficiency,
+                                robot.max_speed)
+    d = sim.advance(m, d, belts, targets, setup.substeps)
+    return d, d.qpos
+
+  d0 = setup.initial_data()
+  _, qpos = jax.jit(lambda d: jax.lax.scan(control_step, d, None, length=n_steps))(d0)
+  return np.concatenate([np.asarray(d0.qpos)[None], np.asarray(qpos)], axis=0)
+
+
+def summarize(setup: DriveSetup, qpos: np.ndarray) -> dict:
+  """Distance travelled, final height, max |pitch|, tipped over, top / bottom reached."""
+  rpy = np.asarray(chassis_rpy(jnp.asarray(qpos)))
+  tipped = bool(np.asarray(tipped_over(jnp.asarray(rpy))).any())
+  xyz = qpos[:, :3]
+  ground_z = xyz[:, 2] - setup.sim.robot.spawn_height  # m, belt bottom height
+  top_x, top_z = float(setup.stairs.top_edge_x()), float(setup.stairs.top_z())
+  if setup.direction == "up":
+    reached = bool(np.any((xyz[:, 0] > top_x + 0.3) & (ground_z > top_z - 0.03)))
+  else:
+    reached = bool(np.any((xyz[:, 0] < -0.3) & (ground_z < 0.03)))
+  return {
+      "distance_m": float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum()),
+      "final_height_m": float(ground_z[-1]),
+      "max_abs_pitch_rad": float(np.abs(rpy[:, 1]).max()),
+      "tipped_over": tipped,
+      "goal_reached": reached and not tipped,
+  }
+
+
+def trajectory_record(setup: DriveSetup, qpos: np.ndarray, summary: dict) -> dict:
+  """JSON-ready trajectory: time, position, roll / pitch / yaw, joint angles, summary."""
+  rpy = np.asarray(chassis_rpy(jnp.asarray(qpos)))
+  joints = qpos[:, setup.sim.layout.joint_qpos]
+  t = np.arange(len(qpos)) * setup.control_period
+  return {
+      "robot": setup.sim.robot.name,
+      "stairs": {"riser_m": float(setup.stairs.riser), "tread_m": float(setup.stairs.tread),
+                 "steps": int(setup.stairs.steps)},
+      "direction": setup.direction,
+      "control_period_s": setup.control_period,
+      "joint_names": list(setup.sim.layout.joint_names),
+      "t": t.tolist(), "x": qpos[:, 0].tolist(), "y": qpos[:, 1].tolist(),
+      "z": qpos[:, 2].tolist(), "roll": rpy[:, 0].tolist(), "pitch": rpy[:, 1].tolist(),
+      "yaw": rpy[:, 2].tolist(), "joints": joints.tolist(),
+      "summary": summary,
+  }
+
+
+def main(argv: list[str] | None = None) -> int:
+  p = argparse.ArgumentParser(prog="python -m mjx_tracks.drive", description=__doc__.splitlines()[0])
+  p.add_argument("--robot", default="1", help="1 (Jaguar with arm) or 2 (Absolem)")
+  p.add_argument("--stairs", default="0.17,0.30,7", help="riser H (m), tread L (m), steps N")
+  p.add_argument("--direction", choices=("up", "down"), default="up")
+  p.add_argument("--seconds", type=float, default=20.0)
+  p.add_argument("--controller", choices=("scripted", "keyboard"), default="scripted")
+  p.add_argument("--control-period", type=float, default=0.1, help="s between commands")
+  p.add_argument("--out", help="trajectory JSON path")
+  p.add_argument("--video", help="MP4 path (needs the video extra)")
+  args = p.parse_args(argv)
+  try:
+    robot = get_robot(args.robot)
+  except KeyError as e:
+    raise SystemExit(f"error: {e.args[0]}")
+  if not 0 < args.seconds <= 600:
+    raise SystemExit("error: --seconds must be in (0, 600]")
+  setup = DriveSetup(staircase_simulator(robot), parse_stairs(args.stairs), args.direction,
+                     args.control_period)
+  n_steps = max(1, round(args.seconds / args.control_period))
+  t0 = time.time()
+  if args.controller == "scripted":
+    print(f"compiling and simulating {args.seconds:g} s on {jax.default_backend()} ...", file=sys.stderr)
+    qpos = scripted_rollout(setup, n_steps)
+  else:
+    from mjx_tracks.teleop import keyboard_rollout  # noqa: PLC0415
+    qpos = keyboard_rollout(setup, n_steps)
+  summary = summarize(setup, qpos)
+  if args.out:
+    with open(args.out, "w") as f:
+      json.dump(trajectory_record(setup, qpos, summary), f)
+  if args.video:
+    from mjx_tracks.render import render_frames, write_video  # noqa: PLC0415
+    mj = setup.sim.mj_model
+    ids = setup.sim.layout.step_geoms
+    pos, size = (np.asarray(a) for a in sc.step_boxes(setup.stairs))
+    mj.geom_pos[ids], mj.geom_size[ids] = pos, size
+    write_video(args.video, render_frames(mj, qpos), fps=1.0 / args.control_period)
+  target = "top" if args.direction == "up" else "bottom"
+  print(f"{robot.name} {args.direction} h={float(setup.stairs.riser):.2f} l={float(setup.stairs.tread):.2f} "
+        f"n={int(setup.stairs.steps)}: distance {summary['distance_m']:.2f} m, final height "
+        f"{summary['final_height_m']:.2f} m, max |pitch| {summary['max_abs_pitch_rad']:.2f} rad, "
+        f"tipped over: {'yes' if summary['tipped_over'] else 'no'}, {target} reached: "
+        f"{'yes' if summary['goal_reached'] else 'no'} ({time.time() - t0:.1f} s wall)")
+  return 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())

@@ -1,0 +1,42 @@
+"""Hand-written flipper / arm controller for straight stairs (the scripted baseline of `drive`)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax.numpy as jnp
+
+from mjx_tracks.robots.spec import RobotSpec
+
+
+@dataclasses.dataclass(frozen=True)
+class StairScript:
+  """Pitch-driven rules; angles in rad, speeds in m/s."""
+
+  direction: str  # "up" or "down"
+  speed: float = 0.4  # m/s on the way up (descent uses 0.75 x)
+  climb_pitch: float = 0.1  # rad nose-up (ascent) / nose-down (descent) that means "on the stairs"
+
+  def command(self, robot: RobotSpec, nose_up: jnp.ndarray) -> tuple[float, jnp.ndarray]:
+    """(belt speed, joint targets) from the chassis' nose-up angle."""
+    lim = robot.flipper_limit
+    if self.direction == "up":
+      on_stairs = nose_up >= self.climb_pitch
+      # approach: front flippers raised to hook the first edge; climbing: flippers in line,
+      # rear pair pushing down a little; arm payload forward to keep the COG ahead.
+      front = jnp.where(on_stairs, 0.0, lim)
+      rear = jnp.where(on_stairs, -0.3, 0.0)
+      arm1 = 0.8 * jnp.clip(3.0 * nose_up, 0.0, 1.0)
+      speed = self.speed
+    else:
+      on_stairs = nose_up <= -self.climb_pitch
+      # descent: front flippers reach down to the next tread, then all flippers in line;
+      # arm payload backward.
+      front = jnp.where(on_stairs, 0.0, -lim)
+      rear = jnp.where(on_stairs, 0.0, 0.0)
+      arm1 = -0.8 * jnp.clip(-3.0 * nose_up, 0.0, 1.0)
+      speed = 0.75 * self.speed
+    targets = [front, front, rear, rear]
+    if robot.has_arm:
+      targets += [arm1, jnp.zeros_like(arm1)]
+    return speed, jnp.stack([jnp.asarray(t, jnp.float32) for t in targets])

@@ -1,0 +1,63 @@
+"""Low-level control: action decoding, clipping, increments, skid-steer belt speeds."""
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from mjx_tracks.control import CONTROL_MODES, INCREMENT, Controller, command_belt_speeds
+from mjx_tracks.robots import get_robot
+
+JAGUAR, ABSOLEM = get_robot(1), get_robot(2)
+
+
+def test_modes_have_the_papers_sizes():
+  assert {k: len(v) for k, v in CONTROL_MODES.items()} == {
+      "4dof": 4, "6dof": 6, "8dof": 8, "5dof_stairs": 5}
+
+
+def test_stair_mode_increments_accumulate_and_clip():
+  c = Controller.create(JAGUAR, "5dof_stairs", increments=True)
+  prev = jnp.zeros(6)
+  v, w, t = c.decode(jnp.array([1.0, 1.0, -1.0, 0.5, 0.0]), prev)
+  assert float(v) == pytest.approx(1.0) and float(w) == 0.0
+  np.testing.assert_allclose(t, [INCREMENT, INCREMENT, -INCREMENT, -INCREMENT, 0.5 * INCREMENT, 0],
+                             atol=1e-6)
+  for _ in range(5):
+    _, _, t = c.decode(jnp.array([0.0, 1.0, -1.0, 1.0, 0.0]), t)
+  lim = JAGUAR.flipper_limit
+  np.testing.assert_allclose(t[:4], [lim, lim, -lim, -lim], atol=1e-6)
+  assert float(t[4]) <= JAGUAR.arm.joint1_limit
+
+
+def test_absolute_targets_span_the_limits():
+  c = Controller.create(JAGUAR, "8dof", increments=False, v_range=(-1.0, 1.0))
+  _, _, t = c.decode(jnp.array([0, 0, 1, -1, 0, 0, 1, -1.0]), jnp.zeros(6))
+  np.testing.assert_allclose(t, [math.pi / 4, -math.pi / 4, 0, 0, 1.3, -2.9], atol=1e-5)
+
+
+def test_nan_and_out_of_range_actions_are_clipped_not_propagated():
+  c = Controller.create(JAGUAR, "6dof", increments=True)
+  v, w, t = c.decode(jnp.array([jnp.nan, 50.0, jnp.inf, -jnp.inf, jnp.nan, 3.0]), jnp.zeros(6))
+  assert np.isfinite([float(v), float(w)]).all() and np.isfinite(np.asarray(t)).all()
+  assert float(v) == pytest.approx(0.5)  # NaN -> 0 -> middle of [0, 1] m/s
+  assert float(w) == pytest.approx(JAGUAR.max_yaw_rate)
+  np.testing.assert_allclose(t[:4], [0.0, 0.0, 0.0, INCREMENT], atol=1e-6)  # +-inf and NaN -> 0
+  assert command_belt_speeds(jnp.nan, 0.3, 0.6, 0.5, 1.0).tolist() == pytest.approx([-0.18, 0.18] * 3)
+
+
+def test_belt_speeds_follow_skid_steer_and_clip():
+  u = np.asarray(command_belt_speeds(0.2, 0.5, 0.6, 0.5, 1.0))
+  np.testing.assert_allclose(u, [0.2 - 0.3, 0.5, -0.1, 0.5, -0.1, 0.5], atol=1e-6)
+  u = np.asarray(command_belt_speeds(0.9, 1.0, 0.6, 0.5, 1.0))
+  assert u.max() == pytest.approx(1.0)
+
+
+def test_bad_modes_fail_clearly():
+  with pytest.raises(ValueError, match="unknown control mode"):
+    Controller.create(JAGUAR, "3dof")
+  with pytest.raises(ValueError, match="has none"):
+    Controller.create(ABSOLEM, "5dof_stairs")
+  with pytest.raises(ValueError, match="v_range"):
+    Controller.create(JAGUAR, "4dof", v_range=(0.0, 3.0))
