@@ -9,10 +9,10 @@ below the floor. The first riser is at x = 0; the stairs rise toward +x.
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
+
+from flax import struct
 
 from mjx_tracks.robots.mjcf import WORLD_CONAFFINITY, WORLD_CONTYPE
 
@@ -27,7 +27,7 @@ PARK = (-50.0, 0.0, -10.0)  # m, where unused boxes go
 STEP_NAME = "step{}"
 
 
-@dataclasses.dataclass(frozen=True)
+@struct.dataclass
 class Staircase:
   """Geometry of one staircase; fields may carry a batch axis."""
 

@@ -1,0 +1,98 @@
+"""Simulator throughput: physics substeps/s and control steps/s of batched robots on staircases,
+with the track model and with plain mjx.step of the same model, plus compile times.
+
+python scripts/bench_sim.py [--envs 1024,4096,16384] [--substeps 25] [--reps 5] [--out results.json]
+Each environment gets its own random 7-step-pool staircase (l ~ U(0.35, 0.52) m, h ~ U(0.12, 0.22) m,
+n ~ U{1..7}) and drives toward it at 0.5 m/s with random flipper targets.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import platform
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+
+from mjx_tracks.robots import get_robot
+from mjx_tracks.sim import staircase_simulator
+from scenes import staircase as sc
+
+
+def batch_state(sim, n_envs: int, key):
+  """Per-env scene model and data: random staircases, robots at the ascent spawn + 0.5 m."""
+  k1, k2, k3 = jax.random.split(key, 3)
+  stairs = sc.Staircase(jax.random.uniform(k1, (n_envs,), minval=0.35, maxval=0.52),
+                        jax.random.uniform(k2, (n_envs,), minval=0.12, maxval=0.22),
+                        jax.random.randint(k3, (n_envs,), 1, 8))
+
+  def one(st):
+    pos, yaw = sc.ascent_spawn(st)
+    d = sim.init_data(pos + jnp.array([0.5, 0.0, 0.0]), yaw, jnp.zeros(sim.layout.n_joints))
+    return sc.step_boxes(st), d
+
+  return jax.jit(jax.vmap(one))(stairs)
+
+
+def time_fn(fn, args, reps: int):
+  t = time.time()
+  out = jax.block_until_ready(fn(*args))
+  compile_s = time.time() - t
+  t = time.time()
+  for _ in range(reps):
+    out = fn(*args[:-1], out)
+  jax.block_until_ready(out)
+  return compile_s, (time.time() - t) / reps
+
+
+def main(argv=None) -> int:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("--envs", default="1024,4096,16384")
+  p.add_argument("--substeps", type=int, default=25, help="physics substeps per control step")
+  p.add_argument("--reps", type=int, default=5)
+  p.add_argument("--robot", default="1")
+  p.add_argument("--out")
+  args = p.parse_args(argv)
+  sim = staircase_simulator(get_robot(args.robot))
+  k = args.substeps
+  nj = sim.layout.n_joints
+
+  def control_step(boxes, belts, targets, d):
+    return sim.advance(sim.with_steps(*boxes), d, belts, targets, k)
+
+  def plain(boxes, belts, targets, d):
+    m = sim.with_steps(*boxes)
+    d = d.replace(ctrl=targets)
+    return jax.lax.fori_loop(0, k, lambda _, x: sim.plain_step(m, x), d)
+
+  rows = []
+  for n in [int(x) for x in args.envs.split(",")]:
+    m, d = batch_state(sim, n, jax.random.PRNGKey(n))
+    belts = jnp.full((n, 6), 0.5)
+    targets = jax.random.uniform(jax.random.PRNGKey(1), (n, nj), minval=-0.5, maxval=0.5)
+    row = {"envs": n, "substeps_per_control_step": k}
+    for name, fn in (("tracks", control_step), ("plain_mjx_step", plain)):
+      vf = jax.jit(jax.vmap(fn))
+      compile_s, per_call = time_fn(vf, (m, belts, targets, d), args.reps)
+      row[f"{name}_compile_s"] = round(compile_s, 2)
+      row[f"{name}_substeps_per_s"] = round(n * k / per_call)
+      row[f"{name}_control_steps_per_s"] = round(n / per_call)
+    row["track_model_overhead"] = round(row["plain_mjx_step_substeps_per_s"] / row["tracks_substeps_per_s"] - 1, 3)
+    rows.append(row)
+    print(json.dumps(row), flush=True)
+  result = {"device": str(jax.devices()[0]), "device_kind": jax.devices()[0].device_kind,
+            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "command": "python " + " ".join(sys.argv), "jax": jax.__version__,
+            "host": platform.node(), "robot": sim.robot.name, "rows": rows}
+  if args.out:
+    with open(args.out, "w") as f:
+      json.dump(result, f, indent=1)
+  return 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())
