@@ -38,7 +38,7 @@ class DriveSetup:
     return max(1, round(self.control_period / self.sim.physics.timestep))
 
   def model(self):
-    return self.sim.with_steps(*sc.step_boxes(self.stairs))
+    return self.sim.with_boxes(*sc.step_boxes(self.stairs))
 
   def goal(self):
     """Goal point (m): past the top edge going up, before the first riser going down."""
@@ -158,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
   if args.video:
     from mjx_tracks.render import render_frames, write_video  # noqa: PLC0415
     mj = setup.sim.mj_model
-    ids = setup.sim.layout.step_geoms
+    ids = setup.sim.layout.scene_boxes
     pos, size = (np.asarray(a) for a in sc.step_boxes(setup.stairs))
     mj.geom_pos[ids], mj.geom_size[ids] = pos, size
     write_video(args.video, render_frames(mj, qpos), fps=1.0 / args.control_period)

@@ -25,7 +25,7 @@ class Layout:
   joint_limits: np.ndarray  # (n_joints, 2) rad
   joint_names: tuple[str, ...]
   geom_belt: np.ndarray  # (ngeom,) belt index of each geom (order of BELTS), -1 if none
-  step_geoms: np.ndarray  # (n_steps,) geom ids of the step pool, may be empty
+  scene_boxes: np.ndarray  # (n_boxes,) geom ids of the per-environment boxes, in name order
   world_geoms: np.ndarray  # geoms of the world body (what depth beams see)
   camera_site: int
   imu_site: int
@@ -36,7 +36,10 @@ class Layout:
     return len(self.joint_qpos)
 
 
-def resolve_layout(m: mujoco.MjModel, robot: RobotSpec, step_prefix: str = "step") -> Layout:
+SCENE_BOX = "scenebox"  # name prefix of the world's per-environment boxes (steps, obstacles)
+
+
+def resolve_layout(m: mujoco.MjModel, robot: RobotSpec) -> Layout:
   """Looks every id up by name once; fails loudly if the model lacks one."""
 
   def gid(kind, name):
@@ -57,8 +60,8 @@ def resolve_layout(m: mujoco.MjModel, robot: RobotSpec, step_prefix: str = "step
   steps = []
   for g in range(m.ngeom):
     name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
-    if name.startswith(step_prefix) and name[len(step_prefix):].isdigit():
-      steps.append((int(name[len(step_prefix):]), g))
+    if name.startswith(SCENE_BOX) and name[len(SCENE_BOX):].isdigit():
+      steps.append((int(name[len(SCENE_BOX):]), g))
   return Layout(
       chassis_body=gid(mujoco.mjtObj.mjOBJ_BODY, CHASSIS_BODY),
       joint_qpos=np.array([m.jnt_qposadr[j] for j in jids], np.int32),
@@ -66,7 +69,7 @@ def resolve_layout(m: mujoco.MjModel, robot: RobotSpec, step_prefix: str = "step
       joint_limits=robot.joint_limits(),
       joint_names=names,
       geom_belt=geom_belt,
-      step_geoms=np.array([g for _, g in sorted(steps)], np.int32),
+      scene_boxes=np.array([g for _, g in sorted(steps)], np.int32),
       world_geoms=np.nonzero(m.geom_bodyid == 0)[0].astype(np.int32),
       camera_site=gid(mujoco.mjtObj.mjOBJ_SITE, "depth_camera"),
       imu_site=gid(mujoco.mjtObj.mjOBJ_SITE, "imu"),

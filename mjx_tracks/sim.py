@@ -50,22 +50,21 @@ class Simulator:
   tracks: TrackModel
 
   @staticmethod
-  def create(robot: RobotSpec, world_xml: str, physics: PhysicsConfig = PhysicsConfig(),
-             step_prefix: str = "step") -> "Simulator":
+  def create(robot: RobotSpec, world_xml: str, physics: PhysicsConfig = PhysicsConfig()) -> "Simulator":
     mj_model = compile_model(robot, world_xml, physics)
-    layout = resolve_layout(mj_model, robot, step_prefix)
+    layout = resolve_layout(mj_model, robot)
     tracks = TrackModel.create(mj_model, layout, robot.mu_along, robot.mu_across,
                                robot.track_separation, robot.steering_efficiency)
     return Simulator(robot, physics, mj_model, mjx.put_model(mj_model, impl="jax"), layout, tracks)
 
-  def with_steps(self, step_pos: jax.Array, step_size: jax.Array) -> mjx.Model:
-    """The model with this environment's step boxes (centres, half-sizes in m) swapped in."""
-    ids = jnp.asarray(self.layout.step_geoms)
+  def with_boxes(self, box_pos: jax.Array, box_size: jax.Array) -> mjx.Model:
+    """The model with this environment's scene boxes (centres, half-sizes in m) swapped in."""
+    ids = jnp.asarray(self.layout.scene_boxes)
     m = self.model
     return m.replace(
-        geom_pos=m.geom_pos.at[ids].set(step_pos),
-        geom_size=m.geom_size.at[ids].set(step_size),
-        geom_rbound=m.geom_rbound.at[ids].set(jnp.linalg.norm(step_size, axis=-1)),
+        geom_pos=m.geom_pos.at[ids].set(box_pos),
+        geom_size=m.geom_size.at[ids].set(box_size),
+        geom_rbound=m.geom_rbound.at[ids].set(jnp.linalg.norm(box_size, axis=-1)),
     )
 
   def init_data(self, pos: jax.Array, yaw: jax.Array, joint_angles: jax.Array | None = None) -> mjx.Data:

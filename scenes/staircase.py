@@ -9,11 +9,17 @@ below the floor. The first riser is at x = 0; the stairs rise toward +x.
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 
 from flax import struct
 
+from mjx_tracks.layout import SCENE_BOX
+from scenes import samplers
+from scenes.samplers import Ranges
+from scenes.scene import SceneState
 from mjx_tracks.robots.mjcf import WORLD_CONAFFINITY, WORLD_CONTYPE
 
 N_MAX = 7  # steps in the pool (the reference's n_max)
@@ -24,7 +30,6 @@ GOAL_PAST_EDGE = 1.0  # m, ascent goal past the top step edge; descent goal befo
 GOAL_ABOVE_TREAD = 0.085  # m
 SPAWN_BEFORE_STAIRS = 1.0  # m, ascent spawn in front of the first riser
 PARK = (-50.0, 0.0, -10.0)  # m, where unused boxes go
-STEP_NAME = "step{}"
 
 
 @struct.dataclass
@@ -48,7 +53,7 @@ def world_xml(n_max: int = N_MAX) -> str:
   world = f'contype="{WORLD_CONTYPE}" conaffinity="{WORLD_CONAFFINITY}" condim="3" material="world"'
   half = WIDTH / 2
   steps = "\n".join(
-      f'<geom name="{STEP_NAME.format(k)}" type="box" pos="{PARK[0] - k} {PARK[1]} {PARK[2]}" '
+      f'<geom name="{SCENE_BOX}{k}" type="box" pos="{PARK[0] - k} {PARK[1]} {PARK[2]}" '
       f'size="0.1 0.1 0.1" {world} rgba=".7 .7 .65 1"/>' for k in range(n_max))
   # planes' normals point into the corridor (a plane's normal is its local +z)
   return f"""
@@ -98,3 +103,57 @@ def descent_spawn(stairs: Staircase) -> tuple[jax.Array, jax.Array]:
   z = jnp.zeros_like(stairs.tread)
   pos = jnp.stack([stairs.top_edge_x() + GOAL_PAST_EDGE, z, stairs.top_z()], axis=-1)
   return pos, z + jnp.pi
+
+
+STAIR_RANGES = Ranges(names=("tread", "riser", "steps"), low=(0.35, 0.12, 1.0),
+                      high=(0.52, 0.22, 7.0), integer=(False, False, True),
+                      shrinking=(True, False, False))
+SPAWN_Y = 0.75  # m, random spawn / goal lateral offset ~ U(-0.75, 0.75)
+SPAWN_YAW = jnp.pi / 2  # rad, random spawn yaw offset ~ U(-pi/2, pi/2)
+
+
+@dataclasses.dataclass(frozen=True)
+class StairScene:
+  """Ascent or descent of a randomized straight staircase."""
+
+  direction: str = "up"  # "up" | "down"
+  sampler: str = "incremental"  # "uniform" | "incremental"
+  variant: str = "paper"  # incremental variant: "paper" | "original"
+  ranges: Ranges = STAIR_RANGES
+  random_spawn: bool = False
+  random_goal: bool = False
+
+  def __post_init__(self):
+    if self.direction not in ("up", "down"):
+      raise ValueError(f"stairs direction must be 'up' or 'down', got {self.direction!r}")
+    if self.ranges.names != STAIR_RANGES.names:
+      raise ValueError(f"stair ranges must be named {STAIR_RANGES.names}")
+    lo, hi = self.ranges.low, self.ranges.high
+    if not (lo[0] > 0 and lo[1] > 0 and 1 <= lo[2] and hi[2] <= N_MAX):
+      raise ValueError(f"stair ranges need tread, riser > 0 and 1 <= steps <= {N_MAX}")
+
+  n_boxes = N_MAX
+
+  def world_xml(self) -> str:
+    return world_xml(N_MAX)
+
+  def stairs(self, xi: jax.Array) -> Staircase:
+    return Staircase(tread=xi[0], riser=xi[1], steps=xi[2].astype(jnp.int32))
+
+  def sample(self, key: jax.Array, eps: jax.Array) -> SceneState:
+    """Draws xi, places the boxes, the spawn (ground point, yaw) and the goal."""
+    k_xi, k_y, k_yaw, k_gy, k_gx = jax.random.split(key, 5)
+    xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant)
+    st = self.stairs(xi)
+    pos, size = step_boxes(st)
+    up = self.direction == "up"
+    spawn, yaw = ascent_spawn(st) if up else descent_spawn(st)
+    goal = ascent_goal(st) if up else descent_goal(st)
+    if self.random_spawn:
+      spawn = spawn.at[1].set(jax.random.uniform(k_y, minval=-SPAWN_Y, maxval=SPAWN_Y))
+      yaw = yaw + jax.random.uniform(k_yaw, minval=-SPAWN_YAW, maxval=SPAWN_YAW)
+    if self.random_goal:
+      ahead = 1.0 if up else -1.0
+      goal = goal.at[1].set(jax.random.uniform(k_gy, minval=-SPAWN_Y, maxval=SPAWN_Y))
+      goal = goal.at[0].add(ahead * jax.random.uniform(k_gx, minval=-0.5, maxval=0.5))
+    return SceneState(pos, size, spawn, yaw, goal, xi, jnp.int32(0))

@@ -62,10 +62,10 @@ def main(argv=None) -> int:
   nj = sim.layout.n_joints
 
   def control_step(boxes, belts, targets, d):
-    return sim.advance(sim.with_steps(*boxes), d, belts, targets, k)
+    return sim.advance(sim.with_boxes(*boxes), d, belts, targets, k)
 
   def plain(boxes, belts, targets, d):
-    m = sim.with_steps(*boxes)
+    m = sim.with_boxes(*boxes)
     d = d.replace(ctrl=targets)
     return jax.lax.fori_loop(0, k, lambda _, x: sim.plain_step(m, x), d)
 

@@ -33,7 +33,7 @@ def test_random_actions_on_stairs_stay_finite_and_within_limits(jaguar_stairs):
   sim = jaguar_stairs
   ctl = Controller.create(sim.robot, "8dof", increments=True, v_range=(-1.0, 1.0))
   stairs = sc.Staircase(jnp.float32(0.35), jnp.float32(0.22), jnp.int32(7))
-  m = sim.with_steps(*sc.step_boxes(stairs))
+  m = sim.with_boxes(*sc.step_boxes(stairs))
   pos, yaw = sc.ascent_spawn(stairs)
   d0 = sim.init_data(pos, yaw, jnp.zeros(sim.layout.n_joints))
 
@@ -65,7 +65,7 @@ def test_batched_and_single_steps_agree(jaguar_stairs):
 
   def run(l, h, n, u, t):
     stairs = sc.Staircase(l, h, n)
-    m = sim.with_steps(*sc.step_boxes(stairs))
+    m = sim.with_boxes(*sc.step_boxes(stairs))
     pos, yaw = sc.ascent_spawn(stairs)
     d = sim.init_data(pos + jnp.array([0.6, 0, 0]), yaw, jnp.zeros(6))
     return sim.advance(m, d, u, t, 20).qpos

@@ -21,7 +21,7 @@ SUBSTEPS = 25  # 0.25 s per call at dt = 0.01 s
 def flat(jaguar_stairs):
   """(simulator, flat-ground model, jitted 0.25 s advance)."""
   sim = jaguar_stairs
-  m = sim.with_steps(*sc.step_boxes(sc.Staircase(jnp.float32(0.3), jnp.float32(0.17), jnp.int32(0))))
+  m = sim.with_boxes(*sc.step_boxes(sc.Staircase(jnp.float32(0.3), jnp.float32(0.17), jnp.int32(0))))
   adv = jax.jit(lambda d, belts: sim.advance(m, d, belts, jnp.zeros(sim.layout.n_joints), SUBSTEPS))
   return sim, m, adv
 

@@ -1,0 +1,107 @@
+"""2D navigation: hallway or zigzag (each with probability 1/2) with two wall obstacles.
+
+Area: x in [0, 12] m (start area [0, 2], obstacle area [2, 10], goal area [10, 12]),
+y in [-W/2, W/2] with W = 10 m, closed by four wall planes. xi = (W1, L1, W2, L2, C), with the
+gap C ~ U(C_min, C_max) = U(1, 2) m (the original's 1 + U(0, 1)):
+  hallway: obstacle 1 juts W1 ~ U(W/2 - C/2, W - C) from the left wall, obstacle 2 juts
+           W2 ~ U(0, W - C - W1) from the right wall, so the hallway between them is >= C wide;
+           both run L_i ~ U(L/2, L) along x (L = 8 m) from random points of the obstacle area.
+  zigzag:  two thin walls across the corridor, obstacle 1 from the left wall at x = 2 + L/3,
+           obstacle 2 from the right wall at x = 2 + 2L/3, each W_i ~ U(W/2 - C/2, W - C)
+           long, so the robot must weave; L_i is their thickness (0.3 m).
+Components are drawn as u in [0, 1]^5 by the scene's sampler (uniform or incremental over unit
+ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or random x ~ U(0.5, 1.5),
+y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2). Goal: fixed (11, 0), or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+
+from mjx_tracks.layout import SCENE_BOX
+from mjx_tracks.robots.mjcf import WORLD_CONAFFINITY, WORLD_CONTYPE
+from scenes import samplers
+from scenes.samplers import Ranges
+from scenes.scene import SceneState
+
+AREA_W = 10.0  # m, W
+OBSTACLE_L = 8.0  # m, L
+START_X, GOAL_X, AREA_LEN = 2.0, 10.0, 12.0  # m
+GAP = (1.0, 2.0)  # m, C range
+WALL_THICKNESS = 0.3  # m, zigzag walls
+OBSTACLE_HEIGHT = 1.0  # m
+UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
+              integer=(False,) * 5, shrinking=(False,) * 5)
+
+
+def _lerp(a, b, u):
+  return a + (b - a) * u
+
+
+@dataclasses.dataclass(frozen=True)
+class NavScene:
+  """Hallway / zigzag navigation area."""
+
+  sampler: str = "uniform"
+  variant: str = "paper"
+  kinds: tuple[str, ...] = ("hallway", "zigzag")  # drawn with equal probability
+  random_spawn: bool = False
+  random_goal: bool = False
+
+  def __post_init__(self):
+    if not self.kinds or any(k not in ("hallway", "zigzag") for k in self.kinds):
+      raise ValueError(f"nav kinds must be a non-empty subset of ('hallway', 'zigzag'), got {self.kinds}")
+
+  n_boxes = 2
+  direction = "flat"
+
+  def world_xml(self) -> str:
+    w = f'contype="{WORLD_CONTYPE}" conaffinity="{WORLD_CONAFFINITY}" condim="3" material="world"'
+    h = AREA_W / 2
+    boxes = "\n".join(f'<geom name="{SCENE_BOX}{k}" type="box" pos="{-20 - 3 * k} 0 -5" size="0.1 0.1 0.1" '
+                      f'{w} rgba=".6 .4 .3 1"/>' for k in range(2))
+    return f"""
+    <geom name="floor" type="plane" size="0 0 1" {w} rgba=".5 .55 .5 1"/>
+    <geom name="wall_left" type="plane" pos="0 {h} 0" zaxis="0 -1 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
+    <geom name="wall_right" type="plane" pos="0 {-h} 0" zaxis="0 1 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
+    <geom name="wall_back" type="plane" pos="0 0 0" zaxis="1 0 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
+    <geom name="wall_front" type="plane" pos="{AREA_LEN} 0 0" zaxis="-1 0 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
+    {boxes}"""
+
+  def sample(self, key: jax.Array, eps: jax.Array) -> SceneState:
+    k_kind, k_u, k_x, k_s, k_g = jax.random.split(key, 5)
+    kinds = jnp.array([{"hallway": 0, "zigzag": 1}[k] for k in self.kinds])
+    variant = kinds[jax.random.randint(k_kind, (), 0, len(self.kinds))]
+    u = samplers.sample(k_u, eps, UNIT, self.sampler, self.variant)
+    c = _lerp(*GAP, u[4])
+    w1 = _lerp(AREA_W / 2 - c / 2, AREA_W - c, u[0])
+    half_w = AREA_W / 2
+    # hallway
+    w2_h = _lerp(0.0, AREA_W - c - w1, u[2])
+    l1, l2 = _lerp(OBSTACLE_L / 2, OBSTACLE_L, u[1]), _lerp(OBSTACLE_L / 2, OBSTACLE_L, u[3])
+    x1 = START_X + jax.random.uniform(k_x, (2,)) * (OBSTACLE_L - jnp.stack([l1, l2]))
+    hall_pos = jnp.array([[x1[0] + l1 / 2, half_w - w1 / 2, 0.0], [x1[1] + l2 / 2, -half_w + w2_h / 2, 0.0]])
+    hall_size = jnp.array([[l1 / 2, w1 / 2, 0.0], [l2 / 2, w2_h / 2, 0.0]])
+    # zigzag
+    w2_z = _lerp(AREA_W / 2 - c / 2, AREA_W - c, u[2])
+    zig_pos = jnp.array([[START_X + OBSTACLE_L / 3, half_w - w1 / 2, 0.0],
+                         [START_X + 2 * OBSTACLE_L / 3, -half_w + w2_z / 2, 0.0]])
+    zig_size = jnp.array([[WALL_THICKNESS / 2, w1 / 2, 0.0], [WALL_THICKNESS / 2, w2_z / 2, 0.0]])
+    zig = variant == 1
+    pos = jnp.where(zig, zig_pos, hall_pos).at[:, 2].set(OBSTACLE_HEIGHT / 2)
+    size = jnp.where(zig, zig_size, hall_size).at[:, 2].set(OBSTACLE_HEIGHT / 2)
+    size = jnp.maximum(size, 1e-3)  # a zero-width obstacle stays a valid box
+    xi = jnp.stack([w1, jnp.where(zig, WALL_THICKNESS, l1), jnp.where(zig, w2_z, w2_h),
+                    jnp.where(zig, WALL_THICKNESS, l2), c])
+    s = jax.random.uniform(k_s, (3,))
+    if self.random_spawn:
+      spawn, yaw = jnp.array([_lerp(0.5, 1.5, s[0]), _lerp(-4.0, 4.0, s[1]), 0.0]), _lerp(-jnp.pi / 2, jnp.pi / 2, s[2])
+    else:
+      spawn, yaw = jnp.array([1.0, 0.0, 0.0]), jnp.float32(0.0)
+    g = jax.random.uniform(k_g, (2,))
+    goal = (jnp.array([_lerp(10.5, 11.5, g[0]), _lerp(-4.0, 4.0, g[1]), 0.085]) if self.random_goal
+            else jnp.array([11.0, 0.0, 0.085]))
+    return SceneState(pos, size, spawn, yaw, goal, xi, variant.astype(jnp.int32))

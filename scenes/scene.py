@@ -1,0 +1,17 @@
+"""What a reset draws for one environment: box geometry, spawn, goal and the parameters xi."""
+
+from __future__ import annotations
+
+import jax
+from flax import struct
+
+
+@struct.dataclass
+class SceneState:
+  box_pos: jax.Array  # (n_boxes, 3) m, centres of the world's scene boxes
+  box_size: jax.Array  # (n_boxes, 3) m, half-sizes
+  spawn_pos: jax.Array  # (3,) m, ground point under the robot's centre
+  spawn_yaw: jax.Array  # () rad
+  goal: jax.Array  # (3,) m
+  xi: jax.Array  # (k,) sampled scene parameters (names in the scene's Ranges)
+  variant: jax.Array  # () int32: 0 stairs / hallway, 1 zigzag

@@ -1,0 +1,110 @@
+"""Batched staircase geometry against a MuJoCo C model built directly from xi; rays; distinct scenes."""
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+import pytest
+from mujoco import mjx
+
+from scenes.navigation import AREA_W, NavScene
+from scenes.staircase import LANDING_LENGTH, StairScene
+
+
+def _c_model_from_xi(l: float, h: float, n: int) -> mujoco.MjModel:
+  """Independent oracle: one box per step written out by hand from (l, h, n)."""
+  geoms = []
+  for k in range(n):
+    length = LANDING_LENGTH if k == n - 1 else l
+    geoms.append(f'<geom type="box" pos="{k * l + length / 2} 0 {(k + 1) * h / 2}" '
+                 f'size="{length / 2} 1 {(k + 1) * h / 2}"/>')
+  return mujoco.MjModel.from_xml_string(f"<mujoco><worldbody>{''.join(geoms)}</worldbody></mujoco>")
+
+
+@pytest.fixture(scope="module")
+def batch(jaguar_stairs):
+  """32 uniform staircases placed into the compiled model, after MJX kinematics."""
+  sim = jaguar_stairs
+  scene = StairScene(sampler="uniform")
+  keys = jax.random.split(jax.random.PRNGKey(7), 32)
+
+  def one(key):
+    s = scene.sample(key, 0.0)
+    m = sim.with_boxes(s.box_pos, s.box_size)
+    d = mjx.kinematics(m, mjx.make_data(m, impl="jax"))
+    xs = (jnp.arange(7) + 0.5) * s.xi[0]
+    rays = jax.vmap(lambda x: mjx.ray(m, d, jnp.array([x, 0.3, 5.0]), jnp.array([0.0, 0, -1]),
+                                      geomgroup=(1, 0, 0, 0, 0, 0))[0])(xs)
+    return s, d.geom_xpos[sim.layout.scene_boxes], m.geom_size[sim.layout.scene_boxes], rays
+
+  return jax.jit(jax.vmap(one))(keys)
+
+
+def test_step_boxes_sit_where_xi_says(batch):
+  s, xpos, size, _ = batch
+  for i in range(xpos.shape[0]):
+    l, h, n = (float(s.xi[i, 0]), float(s.xi[i, 1]), int(s.xi[i, 2]))
+    c = _c_model_from_xi(l, h, n)
+    d = mujoco.MjData(c)
+    mujoco.mj_forward(c, d)
+    np.testing.assert_allclose(np.asarray(xpos[i, :n]), d.geom_xpos, atol=1e-5)
+    np.testing.assert_allclose(np.asarray(size[i, :n]), c.geom_size, atol=1e-5)
+    assert (np.asarray(xpos[i, n:, 2]) < -5).all()  # unused steps parked below the floor
+
+
+def test_ray_straight_down_over_each_tread_hits_its_height(batch):
+  s, _, _, rays = batch
+  for i in range(rays.shape[0]):
+    l, h, n = (float(s.xi[i, 0]), float(s.xi[i, 1]), int(s.xi[i, 2]))
+    c = _c_model_from_xi(l, h, n)
+    d = mujoco.MjData(c)
+    mujoco.mj_forward(c, d)
+    for k in range(n):
+      expected = 5.0 - (k + 1) * h
+      gid = np.zeros(1, np.int32)
+      oracle = mujoco.mj_ray(c, d, np.array([(k + 0.5) * l, 0.3, 5.0]), np.array([0.0, 0, -1]),
+                             None, 1, -1, gid)
+      assert float(rays[i, k]) == pytest.approx(expected, abs=1e-4)
+      assert oracle == pytest.approx(expected, abs=1e-6)
+
+
+def test_one_key_resets_256_distinct_staircases():
+  scene = StairScene(sampler="uniform")
+  s = jax.jit(jax.vmap(scene.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(0), 256), 0.0)
+  xi = np.asarray(s.xi)
+  assert len({tuple(row) for row in xi.round(6)}) == 256
+
+
+def test_spawn_and_goal_follow_the_geometry():
+  up = StairScene(direction="up", sampler="uniform")
+  down = StairScene(direction="down", sampler="uniform")
+  key = jax.random.PRNGKey(3)
+  su, sd = up.sample(key, 0.0), down.sample(key, 0.0)
+  l, h, n = (float(x) for x in su.xi)
+  np.testing.assert_allclose(np.asarray(su.goal), [(n - 1) * l + 1.0, 0, n * h + 0.085], atol=1e-5)
+  np.testing.assert_allclose(np.asarray(su.spawn_pos), [-1.0, 0, 0], atol=1e-6)
+  np.testing.assert_allclose(np.asarray(sd.spawn_pos), [(n - 1) * l + 1.0, 0, n * h], atol=1e-5)
+  assert float(sd.spawn_yaw) == pytest.approx(np.pi)
+  np.testing.assert_allclose(np.asarray(sd.goal), [-1.0, 0, 0.085], atol=1e-6)
+
+
+def test_random_spawn_stays_in_its_area():
+  scene = StairScene(sampler="uniform", random_spawn=True, random_goal=True)
+  s = jax.vmap(scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(1), 2000), 0.0)
+  y, yaw = np.asarray(s.spawn_pos[:, 1]), np.asarray(s.spawn_yaw)
+  assert np.abs(y).max() <= 0.75 and np.abs(y).max() > 0.7
+  assert np.abs(yaw).max() <= np.pi / 2 and np.abs(yaw).max() > 1.5
+
+
+def test_navigation_kinds_are_equally_likely_and_leave_a_gap():
+  scene = NavScene(random_spawn=True, random_goal=True)
+  s = jax.jit(jax.vmap(scene.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(2), 4000), 0.0)
+  kind = np.asarray(s.variant)
+  assert abs(kind.mean() - 0.5) < 0.03
+  w1, w2, c = (np.asarray(s.xi[:, i]) for i in (0, 2, 4))
+  assert ((c >= 1.0) & (c <= 2.0)).all()
+  hall, zig = kind == 0, kind == 1
+  assert (AREA_W - w1[hall] - w2[hall] >= c[hall] - 1e-4).all()  # hallway at least C wide
+  assert (w1[zig] >= AREA_W / 2 - c[zig] / 2 - 1e-4).all() and (AREA_W - w1[zig] >= c[zig] - 1e-4).all()
+  # zigzag walls jut from alternating sides and together span at least W - C of the width
+  assert (w1[zig] + w2[zig] >= AREA_W - c[zig] - 1e-4).all()
