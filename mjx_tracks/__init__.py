@@ -1,0 +1,33 @@
+"""mjx-tracks: vectorised RL for articulated tracked robots on MuJoCo MJX.
+
+After `import mjx_tracks`, every task in configs/ is registered with Gymnasium as
+`mjx_tracks/<task>-v0` (single robot and vector env), and `mjx_tracks.load(task, overrides)`
+returns the task's Brax environment.
+"""
+
+import os
+
+# Offscreen rendering needs its GL backend chosen before mujoco is first imported.
+if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+  os.environ["MUJOCO_GL"] = "egl"
+
+
+def load(task: str, overrides=()):
+  """The Brax environment of a task (configs/<task>.yaml plus dotted KEY=VALUE overrides)."""
+  from mjx_tracks.tasks import load as _load  # noqa: PLC0415
+  return _load(task, overrides)
+
+
+def _register_gymnasium() -> None:
+  import gymnasium  # noqa: PLC0415
+
+  from mjx_tracks.config import available_tasks  # noqa: PLC0415
+  for task in available_tasks():
+    env_id = f"mjx_tracks/{task}-v0"
+    if env_id not in gymnasium.registry:
+      gymnasium.register(id=env_id, entry_point="mjx_tracks.gym_env:TrackedRobotGymEnv",
+                         vector_entry_point="mjx_tracks.gym_env:TrackedRobotVectorEnv",
+                         kwargs={"task": task})
+
+
+_register_gymnasium()

@@ -2,21 +2,13 @@
 
 from __future__ import annotations
 
-import os
-
+import mujoco
 import numpy as np
-
-
-def _mujoco_with_gl():
-  os.environ.setdefault("MUJOCO_GL", "egl")
-  import mujoco  # noqa: PLC0415  (the GL backend must be chosen before the import)
-  return mujoco
 
 
 def render_frames(mj_model, qpos_seq: np.ndarray, width: int = 480, height: int = 360,
                   distance: float = 3.0) -> list[np.ndarray]:
   """One RGB frame per qpos row, from a camera that follows the chassis."""
-  mujoco = _mujoco_with_gl()
   data = mujoco.MjData(mj_model)
   cam = mujoco.MjvCamera()
   cam.distance, cam.azimuth, cam.elevation = distance, 120.0, -20.0

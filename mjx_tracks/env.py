@@ -1,0 +1,225 @@
+"""The task environment: a Brax `Env` whose reset / step are pure functions of a typed state.
+
+One control step: action -> low-level control -> physics substeps with the track model -> sensors
+(IMU, pose, joints, depth beams) -> monitor (reward terms, termination, safety) -> observation.
+The scene (staircase or navigation area) is data in the state, drawn at reset from the scene
+sampler at difficulty eps; `reset_at(key, eps, penalty_k)` is what the curriculum wrapper calls.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from brax.envs.base import Env, State
+from flax import struct
+from mujoco import mjx
+from mujoco.mjx._src import smooth
+
+from mjx_tracks.beams import BeamLayout, depth_beams
+from mjx_tracks.config import ConfigError, TaskConfig
+from mjx_tracks.control import Controller
+from mjx_tracks.monitor import REWARD_TERMS, Monitor, cog_deviation, goal_distance, normalizer_init
+from mjx_tracks.physics import PhysicsConfig
+from mjx_tracks.pose import chassis_rpy
+from mjx_tracks.robots import get_robot
+from mjx_tracks.sim import Simulator
+from scenes.curriculum import Curriculum
+from scenes.navigation import NavScene
+from scenes.scene import SceneState
+from scenes.staircase import StairScene, Staircase
+from scenes.samplers import Ranges
+
+METRICS = tuple(f"reward/{t}" for t in REWARD_TERMS) + (
+    "progress", "cog_deviation", "on_stairs", "pitch_rate", "tipped_over", "goal_reached",
+    "moved_away", "physics_nan")
+
+
+@struct.dataclass
+class EnvState:
+  """Everything one environment carries between control steps."""
+
+  data: mjx.Data
+  scene: SceneState
+  targets: jax.Array  # (n_joints,) rad, joint servo targets
+  d0: jax.Array  # () m, starting goal distance (minus tolerance)
+  closest: jax.Array  # () m, closest goal distance so far
+  window: jax.Array  # (safety_window,) last raw safety samples
+  penalty_sum: jax.Array  # () raw safety penalty summed over the episode
+  penalty_k: jax.Array  # () global penalty normalization K
+  key: jax.Array
+
+
+def _make_scene(cfg: TaskConfig):
+  s = cfg.scene
+  if s.kind == "stairs":
+    ranges = Ranges(names=("tread", "riser", "steps"), low=(s.tread[0], s.riser[0], float(s.steps[0])),
+                    high=(s.tread[1], s.riser[1], float(s.steps[1])), integer=(False, False, True),
+                    shrinking=(True, False, False))
+    return StairScene(s.direction, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
+  return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal)
+
+
+class TrackedRobotEnv(Env):
+  """Brax environment of one task; nothing on self changes after __init__."""
+
+  def __init__(self, cfg: TaskConfig):
+    self.cfg = cfg
+    self.robot = get_robot(cfg.robot)
+    if ("arm" in cfg.observation.parts) and not self.robot.has_arm:
+      raise ConfigError(f"observation.parts: 'arm' needs a robot with an arm; robot {cfg.robot} has none")
+    try:
+      self.controller = Controller.create(self.robot, cfg.control.mode, cfg.control.increments,
+                                          cfg.control.v_range)
+    except ValueError as e:
+      raise ConfigError(f"control: {e}") from e
+    self.scene = _make_scene(cfg)
+    p = cfg.physics
+    self.sim = Simulator.create(self.robot, self.scene.world_xml(),
+                                PhysicsConfig(p.timestep, p.solver_iterations, p.ls_iterations))
+    self.substeps = int(round(cfg.control.period / p.timestep))
+    o = cfg.observation
+    self.beams = BeamLayout.create(
+        self.robot.camera_hfov, self.robot.camera_resolution,
+        o.vertical_beams if "vertical_beams" in o.parts else 0,
+        o.horizontal_beams if "horizontal_beams" in o.parts else 0,
+        o.band_px, o.rays_per_band, o.depth_range, self.robot.camera_range[1], o.noise)
+    self.monitor = Monitor(cfg.reward, cfg.episode)
+    c = cfg.scene.curriculum
+    self.curriculum = Curriculum(window=c.window, rule=c.rule)
+    self._part_sizes = {"v": 1, "w": 1, "flippers": 4, "flippers_paired": 2, "arm": 2, "pitch": 1,
+                        "roll": 1, "heading": 1, "goal_distance": 1, "angular_velocity": 3,
+                        "vertical_beams": o.vertical_beams, "horizontal_beams": o.horizontal_beams}
+
+  # --- Brax Env interface -------------------------------------------------------------------
+  @property
+  def observation_size(self) -> int:
+    return sum(self._part_sizes[p] for p in self.cfg.observation.parts)
+
+  @property
+  def action_size(self) -> int:
+    return self.controller.action_size
+
+  @property
+  def backend(self) -> str:
+    return "mjx"
+
+  def reset(self, rng: jax.Array) -> State:
+    return self.reset_at(rng, jnp.float32(self.curriculum.eps0), normalizer_init(self.cfg.reward).k)
+
+  def step(self, state: State, action: jax.Array) -> State:
+    es: EnvState = state.pipeline_state
+    m = self.sim.with_boxes(es.scene.box_pos, es.scene.box_size)
+    v, w, targets = self.controller.decode(action, es.targets)
+    data = self.sim.advance(m, es.data, self.controller.belt_speeds(v, w), targets, self.substeps)
+    data = self._sense(m, data)
+    # a physics blow-up ends the episode and keeps the last finite state
+    finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
+    data = jax.tree_util.tree_map(lambda a, b: jnp.where(finite, a, b), data, es.data)
+
+    pos = data.xpos[self.sim.layout.chassis_body]
+    rpy = chassis_rpy(data.qpos)
+    dist = goal_distance(pos, es.scene.goal, self.cfg.episode.goal_tolerance)
+    cog, on_stairs = self._cog(data, es.scene)
+    pitch_rate = jnp.abs(data.qvel[4])
+    sample = self.monitor.safety_sample(cog, pitch_rate)
+    window = jnp.roll(es.window, 1).at[0].set(sample)
+    terms, progress, closest, terminated, flags = self.monitor.evaluate(
+        dist, es.closest, es.d0, rpy, window, es.penalty_k)
+    terms = {k: jnp.where(finite, t, 0.0) for k, t in terms.items()}
+    terminated = terminated | ~finite
+    key, k_obs = jax.random.split(es.key)
+    es = es.replace(data=data, targets=targets, closest=closest, window=window, key=key,
+                    penalty_sum=es.penalty_sum + self.monitor.safety_scale() * jnp.mean(window))
+    metrics = self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)
+    reward = sum(terms.values())
+    return state.replace(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=reward,
+                         done=terminated.astype(jnp.float32), metrics=metrics)
+
+  # --- the curriculum wrapper's reset -------------------------------------------------------
+  def reset_at(self, rng: jax.Array, eps: jax.Array, penalty_k: jax.Array) -> State:
+    """Draws a scene at difficulty eps and places the robot at its spawn."""
+    k_scene, k_obs, k_next = jax.random.split(rng, 3)
+    scene = self.scene.sample(k_scene, eps)
+    m = self.sim.with_boxes(scene.box_pos, scene.box_size)
+    nj = self.sim.layout.n_joints
+    data = self._sense(m, self.sim.init_data(scene.spawn_pos, scene.spawn_yaw, jnp.zeros(nj)))
+    d0 = goal_distance(data.xpos[self.sim.layout.chassis_body], scene.goal, self.cfg.episode.goal_tolerance)
+    es = EnvState(data=data, scene=scene, targets=jnp.zeros(nj), d0=d0, closest=d0,
+                  window=jnp.zeros(self.cfg.reward.safety_window), penalty_sum=jnp.float32(0.0),
+                  penalty_k=jnp.asarray(penalty_k, jnp.float32), key=k_next)
+    zero = jnp.float32(0.0)
+    metrics = {k: zero for k in METRICS}
+    return State(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=zero, done=zero,
+                 metrics=metrics, info={"eps": jnp.asarray(eps, jnp.float32)})
+
+  # --- sensors ------------------------------------------------------------------------------
+  def _sense(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:
+    """Positions, orientations and centre of mass consistent with the current qpos."""
+    return smooth.com_pos(m, smooth.kinematics(m, d))
+
+  def _cog(self, d: mjx.Data, scene: SceneState) -> tuple[jax.Array, jax.Array]:
+    """COG deviation (m) and whether the robot is on the stairs (1.0 / 0.0)."""
+    if self.cfg.scene.kind != "stairs":
+      return jnp.float32(0.0), jnp.float32(0.0)
+    st: Staircase = self.scene.stairs(scene.xi)
+    body = self.sim.layout.chassis_body
+    x = d.xpos[body][0]
+    on = (x >= -0.3) & (x <= st.top_edge_x() + 0.3)
+    dev = cog_deviation(d.subtree_com[body], d.xpos[body], jnp.arctan2(st.riser, st.tread))
+    return jnp.where(on, dev, 0.0), on.astype(jnp.float32)
+
+  def imu(self, d: mjx.Data) -> dict[str, jax.Array]:
+    """Pitch, roll (rad), body angular velocity (rad/s), body linear velocity (m/s), joints, pose."""
+    rot = d.xmat[self.sim.layout.chassis_body]
+    rpy = chassis_rpy(d.qpos)
+    return {"roll": rpy[0], "pitch": rpy[1], "yaw": rpy[2], "angular_velocity": d.qvel[3:6],
+            "linear_velocity": rot.T @ d.qvel[0:3], "joints": d.qpos[self.sim.layout.joint_qpos],
+            "position": d.qpos[0:3], "quaternion": d.qpos[3:7]}
+
+  def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array) -> jax.Array:
+    d = es.data
+    imu = self.imu(d)
+    joints = imu["joints"]
+    o = self.cfg.observation
+    beams = (depth_beams(self.beams, m, d, self.sim.layout.camera_site, key)
+             if self.beams.n_features else jnp.zeros(0))
+    pos = imu["position"]
+    to_goal = es.scene.goal - pos
+    heading = jnp.arctan2(to_goal[1], to_goal[0]) - imu["yaw"]
+    part = {
+        "v": lambda: imu["linear_velocity"][:1],
+        "w": lambda: d.qvel[5:6],
+        "flippers": lambda: joints[:4],
+        "flippers_paired": lambda: jnp.stack([joints[:2].mean(), joints[2:4].mean()]),
+        "arm": lambda: joints[4:6],
+        "pitch": lambda: imu["pitch"][None],
+        "roll": lambda: imu["roll"][None],
+        "heading": lambda: jnp.arctan2(jnp.sin(heading), jnp.cos(heading))[None],
+        "goal_distance": lambda: jnp.linalg.norm(to_goal)[None],
+        "angular_velocity": lambda: imu["angular_velocity"],
+        "vertical_beams": lambda: beams[: o.vertical_beams],
+        "horizontal_beams": lambda: beams[self.beams.n_features - o.horizontal_beams:],
+    }
+    obs = jnp.concatenate([part[p]() for p in o.parts])
+    return jnp.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
+
+  def _metrics(self, terms, progress, cog, on_stairs, pitch_rate, flags, nan) -> dict[str, jax.Array]:
+    f = lambda x: jnp.asarray(x, jnp.float32)
+    out = {f"reward/{k}": f(v) for k, v in terms.items()}
+    out.update(progress=f(progress), cog_deviation=f(cog), on_stairs=f(on_stairs),
+               pitch_rate=f(pitch_rate), tipped_over=f(flags["tipped"]),
+               goal_reached=f(flags["reached"]), moved_away=f(flags["away"]), physics_nan=f(nan))
+    assert tuple(out) == METRICS
+    return out
+
+
+def observation_names(env: TrackedRobotEnv) -> list[str]:
+  """One name per observation entry, in order."""
+  names = []
+  for p in env.cfg.observation.parts:
+    n = env._part_sizes[p]
+    names += [p] if n == 1 else [f"{p}[{i}]" for i in range(n)]
+  return names
+
+
+__all__ = ["EnvState", "TrackedRobotEnv", "METRICS", "observation_names"]

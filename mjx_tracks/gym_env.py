@@ -1,0 +1,139 @@
+"""Gymnasium interfaces over the same jitted core: one robot (`Env`) and N robots (`VectorEnv`).
+
+Both use the task's batched stack (Vmap -> Episode -> curriculum auto-reset), so the curriculum
+runs exactly as in Brax training. The vector env resets finished robots in the same step
+(autoreset mode SAME_STEP; the last observation is in info["final_obs"]).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import gymnasium as gym
+import jax
+import jax.numpy as jnp
+import numpy as np
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from mjx_tracks.tasks import load
+from mjx_tracks.wrappers import batched_env
+
+
+def _spaces(core) -> tuple[gym.spaces.Box, gym.spaces.Box]:
+  obs = gym.spaces.Box(-np.inf, np.inf, (core.observation_size,), np.float32)
+  act = gym.spaces.Box(-1.0, 1.0, (core.action_size,), np.float32)
+  return obs, act
+
+
+class _Stack:
+  """Jitted reset / step of the batched stack for n robots."""
+
+  def __init__(self, task: str, overrides: Sequence[str], n: int):
+    self.core = load(task, overrides)
+    self.env = batched_env(self.core)
+    self.n = n
+    self.reset = jax.jit(self.env.reset)
+    self.step = jax.jit(self.env.step)
+
+  def keys(self, seed: int) -> jax.Array:
+    return jax.random.split(jax.random.PRNGKey(seed), self.n)
+
+  def outputs(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    done = np.asarray(s.done, bool)
+    trunc = np.asarray(s.info["truncation"], bool) & done
+    return (np.asarray(s.obs, np.float32), np.asarray(s.reward, np.float64), done & ~trunc, trunc)
+
+
+def _frame(core, state, index: int, width: int, height: int) -> np.ndarray:
+  from mjx_tracks.render import render_frames  # noqa: PLC0415
+  es = jax.tree_util.tree_map(lambda x: np.asarray(x[index]), state.pipeline_state)
+  mj = core.sim.mj_model
+  ids = core.sim.layout.scene_boxes
+  mj.geom_pos[ids], mj.geom_size[ids] = es.scene.box_pos, es.scene.box_size
+  return render_frames(mj, es.data.qpos[None], width, height)[0]
+
+
+class TrackedRobotGymEnv(gym.Env):
+  """One robot of a task, with proper spaces, seeding, terminated / truncated and rgb rendering."""
+
+  metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
+
+  def __init__(self, task: str, overrides: Sequence[str] = (), render_mode: str | None = None,
+               render_size: tuple[int, int] = (320, 240)):
+    if render_mode not in (None, "rgb_array"):
+      raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+    self._stack = _Stack(task, overrides, 1)
+    self.observation_space, self.action_space = _spaces(self._stack.core)
+    self.render_mode = render_mode
+    self._size = render_size
+    self._state = None
+    self._seed = 0
+    self.metadata = dict(self.metadata, render_fps=int(round(1 / self._stack.core.cfg.control.period)))
+
+  def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+    super().reset(seed=seed)
+    if seed is not None:
+      self._seed = seed
+    else:
+      self._seed = int(self.np_random.integers(2**31))
+    self._state = self._stack.reset(self._stack.keys(self._seed))
+    return np.asarray(self._state.obs[0], np.float32), {"eps": float(self._state.info["eps"][0])}
+
+  def step(self, action):
+    if self._state is None:
+      raise RuntimeError("call reset() before step()")
+    a = jnp.asarray(np.asarray(action, np.float32).reshape(1, -1))
+    self._state = self._stack.step(self._state, a)
+    obs, reward, term, trunc = self._stack.outputs(self._state)
+    final = np.asarray(self._state.info["final_obs"][0], np.float32)
+    info = {"eps": float(self._state.info["eps"][0]),
+            **{k: float(v[0]) for k, v in self._state.metrics.items()}}
+    return final, float(reward[0]), bool(term[0]), bool(trunc[0]), info
+
+  def render(self):
+    if self.render_mode != "rgb_array" or self._state is None:
+      return None
+    return _frame(self._stack.core, self._state, 0, *self._size)
+
+
+class TrackedRobotVectorEnv(VectorEnv):
+  """N robots of a task stepped by one jitted batch call."""
+
+  metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.SAME_STEP}
+
+  def __init__(self, task: str, num_envs: int, overrides: Sequence[str] = (),
+               render_mode: str | None = None, render_size: tuple[int, int] = (320, 240)):
+    if num_envs < 1:
+      raise ValueError("num_envs must be >= 1")
+    self._stack = _Stack(task, overrides, num_envs)
+    self.num_envs = num_envs
+    self.single_observation_space, self.single_action_space = _spaces(self._stack.core)
+    self.observation_space = batch_space(self.single_observation_space, num_envs)
+    self.action_space = batch_space(self.single_action_space, num_envs)
+    self.render_mode = render_mode
+    self._size = render_size
+    self._state = None
+
+  def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+    if seed is not None:
+      self._np_random, self._np_random_seed = gym.utils.seeding.np_random(seed)
+    seed = int(self.np_random.integers(2**31)) if seed is None else seed
+    self._state = self._stack.reset(self._stack.keys(seed))
+    return np.asarray(self._state.obs, np.float32), {"eps": np.asarray(self._state.info["eps"])}
+
+  def step(self, actions):
+    if self._state is None:
+      raise RuntimeError("call reset() before step()")
+    self._state = self._stack.step(self._state, jnp.asarray(np.asarray(actions, np.float32)))
+    obs, reward, term, trunc = self._stack.outputs(self._state)
+    done = term | trunc
+    info = {"eps": np.asarray(self._state.info["eps"]),
+            "final_obs": np.asarray(self._state.info["final_obs"], np.float32), "_final_obs": done}
+    info.update({k: np.asarray(v) for k, v in self._state.metrics.items()})
+    return obs, reward, term, trunc, info
+
+  def render(self):
+    if self.render_mode != "rgb_array" or self._state is None:
+      return None
+    return _frame(self._stack.core, self._state, 0, *self._size)

@@ -1,0 +1,111 @@
+"""Monitor (paper Section 4.3): reward terms, termination and safety figures, all pure JAX.
+
+Progress (the original's "closest distance so far" rule): dist = |p - goal| - tolerance; whenever
+dist falls below the closest distance so far, the robot earns (closest - dist) / d0, d0 the
+starting dist; an episode's progress rewards sum to at most 1.
+COG deviation (ascent, while on the stairs): with r the centre of mass relative to the chassis
+origin, expressed in a frame tilted by the stair incline theta = atan(h / l) (x' along the incline,
+z' normal to it), Cx = x' - tan|theta| z' and deviation = sqrt(z'^2 + Cx^2), clipped to [0, 0.32] m.
+Angular (descent): |pitch angular velocity| (rad/s) of the chassis.
+Safety penalty: scale * K * mean of the last `safety_window` safety samples; K = 1, or with
+normalize_penalties the original's K = 1 / mean per-episode penalty sum of the first N episodes
+(no penalty during those N).
+Tip-over: |roll| or |pitch| > pi/2 costs tipover_penalty and ends the episode. The episode also
+ends when the goal is reached (dist < 0) or the robot moved away (dist > away_factor * d0).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+from flax import struct
+
+from mjx_tracks.config import EpisodeConfig, RewardConfig
+from mjx_tracks.pose import tipped_over
+
+COG_MAX = 0.32  # m
+REWARD_TERMS = ("progress", "safety", "tipover")
+
+
+def goal_distance(pos: jax.Array, goal: jax.Array, tolerance: float) -> jax.Array:
+  """|p - goal| - tolerance (m)."""
+  return jnp.linalg.norm(pos - goal) - tolerance
+
+
+def progress_step(dist: jax.Array, closest: jax.Array, d0: jax.Array) -> tuple[jax.Array, jax.Array]:
+  """(progress reward, new closest distance)."""
+  gain = jnp.maximum(closest - dist, 0.0) / jnp.maximum(d0, 1e-6)
+  return gain, jnp.minimum(closest, dist)
+
+
+def cog_deviation(com: jax.Array, chassis_pos: jax.Array, incline: jax.Array) -> jax.Array:
+  """COG deviation (m) in the incline frame, clipped to [0, 0.32]."""
+  r = com - chassis_pos
+  c, s = jnp.cos(incline), jnp.sin(incline)
+  x_p = r[0] * c + r[2] * s
+  z_p = -r[0] * s + r[2] * c
+  cx = x_p - jnp.tan(jnp.abs(incline)) * z_p
+  return jnp.clip(jnp.sqrt(z_p**2 + cx**2), 0.0, COG_MAX)
+
+
+@struct.dataclass
+class PenaltyNormalizer:
+  """Global K of the original's penalty normalization (same on every environment and device)."""
+
+  k: jax.Array  # () current K (0 while calibrating)
+  total: jax.Array  # () sum of per-episode penalty sums seen while calibrating
+  count: jax.Array  # () int32 episodes seen while calibrating
+
+
+def normalizer_init(cfg: RewardConfig) -> PenaltyNormalizer:
+  k = jnp.float32(0.0 if cfg.normalize_penalties else 1.0)
+  return PenaltyNormalizer(k, jnp.float32(0.0), jnp.int32(0))
+
+
+def normalizer_update(cfg: RewardConfig, s: PenaltyNormalizer, done: jax.Array,
+                      penalty_sums: jax.Array) -> PenaltyNormalizer:
+  """Counts finished episodes' raw penalty sums until N are seen, then fixes K = 1 / mean."""
+  if not cfg.normalize_penalties:
+    return s
+  need = cfg.normalize_episodes
+  calibrating = s.count < need
+  rank = jnp.cumsum(done) - 1
+  take = done & (s.count + rank < need) & calibrating
+  total = s.total + jnp.sum(jnp.where(take, penalty_sums, 0.0))
+  count = s.count + jnp.sum(take).astype(jnp.int32)
+  k = jnp.where(count >= need, need / jnp.maximum(total, 1e-6), 0.0)
+  return PenaltyNormalizer(k.astype(jnp.float32), total, count)
+
+
+@dataclasses.dataclass(frozen=True)
+class Monitor:
+  """Reward and termination settings of one task."""
+
+  reward: RewardConfig
+  episode: EpisodeConfig
+
+  def safety_sample(self, cog_dev: jax.Array, pitch_rate: jax.Array) -> jax.Array:
+    """The raw safety figure the task's reward function penalizes."""
+    if self.reward.kind == "cog":
+      return cog_dev
+    if self.reward.kind == "angular":
+      return pitch_rate
+    return jnp.zeros_like(cog_dev)
+
+  def safety_scale(self) -> float:
+    return {"cog": self.reward.cog_scale, "angular": self.reward.angular_scale}.get(self.reward.kind, 0.0)
+
+  def evaluate(self, dist, closest, d0, rpy, window: jax.Array, k: jax.Array):
+    """Reward terms, new closest, terminated flag, flags dict for one step."""
+    progress, closest = progress_step(dist, closest, d0)
+    tipped = tipped_over(rpy)
+    reached = dist < 0.0
+    away = dist > self.episode.away_factor * d0
+    terms = {
+        "progress": self.reward.progress_scale * progress,
+        "safety": -self.safety_scale() * k * jnp.mean(window),
+        "tipover": -self.reward.tipover_penalty * tipped.astype(jnp.float32),
+    }
+    return terms, progress, closest, tipped | reached | away, {"tipped": tipped, "reached": reached, "away": away}

@@ -1,0 +1,20 @@
+"""Task registry: a task is a YAML file in configs/; `load` builds its Brax environment."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from mjx_tracks.config import TaskConfig, available_tasks, load_config
+from mjx_tracks.env import TrackedRobotEnv
+
+
+def load(task: str, overrides: Sequence[str] = ()) -> TrackedRobotEnv:
+  """The Brax env of `task` (configs/<task>.yaml with dotted KEY=VALUE overrides)."""
+  return TrackedRobotEnv(load_config(task, overrides))
+
+
+def from_config(cfg: TaskConfig) -> TrackedRobotEnv:
+  return TrackedRobotEnv(cfg)
+
+
+__all__ = ["available_tasks", "from_config", "load", "load_config"]

@@ -1,0 +1,49 @@
+"""Task configs: every task loads; unknown keys, wrong types and bad values fail naming the key."""
+
+import pytest
+
+from mjx_tracks.config import ConfigError, available_tasks, load_config
+
+PAPER_TASKS = {"asc-inc-cog", "asc-uni-cog", "des-inc-ang", "des-uni-ang"}
+
+
+def test_registry_holds_the_papers_tasks_and_more():
+  tasks = set(available_tasks())
+  assert PAPER_TASKS <= tasks and "nav" in tasks and "asc-inc-free" in tasks
+
+
+@pytest.mark.parametrize("task", sorted(PAPER_TASKS))
+def test_paper_tasks_use_robot_1_five_dof_and_sixty_vertical_beams(task):
+  cfg = load_config(task)
+  assert cfg.robot == "1" and cfg.control.mode == "5dof_stairs"
+  assert cfg.observation.parts == ("v", "flippers_paired", "arm", "pitch", "vertical_beams")
+  assert cfg.observation.vertical_beams == 60
+  assert cfg.scene.sampler == ("incremental" if "-inc-" in task else "uniform")
+  assert cfg.reward.kind == ("cog" if task.startswith("asc") else "angular")
+
+
+def test_overrides_apply_and_are_typed():
+  cfg = load_config("asc-inc-cog", ["reward.cog_scale=0.5", "scene.tread=[0.4, 0.5]"])
+  assert cfg.reward.cog_scale == 0.5 and cfg.scene.tread == (0.4, 0.5)
+
+
+@pytest.mark.parametrize("override,message", [
+    ("reward.cog_scal=0.5", "reward.cog_scal: unknown key"),
+    ("rewards.cog_scale=0.5", "rewards: unknown key"),
+    ("reward.cog_scale=abc", "reward.cog_scale: must be a number"),
+    ("episode.max_steps=2.5", "episode.max_steps: must be an integer"),
+    ("scene.steps=[1, 9]", "scene.steps: needs 1 <= min <= max <= 7"),
+    ("control.mode=3dof", "control.mode: must be one of"),
+    ("scene.curriculum.rule=median", "scene.curriculum.rule"),
+    ("physics.timestep=0.3", "physics.timestep"),
+    ("control.period=0.255", "control.period: must be a multiple"),
+    ("reward.cog_scale", "expected KEY=VALUE"),
+])
+def test_bad_values_fail_naming_the_key(override, message):
+  with pytest.raises(ConfigError, match=message.replace("[", r"\[")):
+    load_config("asc-inc-cog", [override])
+
+
+def test_unknown_task_lists_the_known_ones():
+  with pytest.raises(ConfigError, match="unknown task 'flying'.*asc-inc-cog"):
+    load_config("flying")

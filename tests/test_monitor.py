@@ -1,0 +1,72 @@
+"""Reward terms against hand-computed cases."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from mjx_tracks.config import EpisodeConfig, RewardConfig
+from mjx_tracks.monitor import (Monitor, cog_deviation, goal_distance, normalizer_init,
+                                normalizer_update, progress_step)
+
+
+def test_moving_half_a_metre_toward_a_goal_two_metres_away_earns_a_quarter():
+  goal = jnp.array([2.3, 0.0, 0.0])
+  d0 = goal_distance(jnp.zeros(3), goal, 0.3)
+  assert float(d0) == pytest.approx(2.0)
+  dist = goal_distance(jnp.array([0.5, 0, 0]), goal, 0.3)
+  r, closest = progress_step(dist, d0, d0)
+  assert float(r) == pytest.approx(0.25) and float(closest) == pytest.approx(1.5)
+  # moving back and forth earns nothing until the closest distance is beaten again
+  back = goal_distance(jnp.array([0.2, 0, 0]), goal, 0.3)
+  r2, closest2 = progress_step(back, closest, d0)
+  assert float(r2) == 0.0 and float(closest2) == pytest.approx(1.5)
+  r3, _ = progress_step(goal_distance(jnp.array([1.0, 0, 0]), goal, 0.3), closest2, d0)
+  assert float(r3) == pytest.approx(0.25)
+
+
+def test_cog_deviation_hand_cases():
+  flat = cog_deviation(jnp.array([0.1, 0.0, 0.2]), jnp.zeros(3), jnp.float32(0.0))
+  assert float(flat) == pytest.approx(np.hypot(0.1, 0.2))  # no incline: |(x, z)|
+  theta = np.arctan2(0.17, 0.30)
+  # a COG straight above the chassis origin along the incline normal, 0.1 m up
+  n = np.array([-np.sin(theta), 0.0, np.cos(theta)])
+  dev = cog_deviation(jnp.asarray(0.1 * n, jnp.float32), jnp.zeros(3), jnp.float32(theta))
+  cx = -np.tan(theta) * 0.1
+  assert float(dev) == pytest.approx(np.hypot(0.1, cx), abs=1e-6)
+  assert float(cog_deviation(jnp.array([0, 0, 1.0]), jnp.zeros(3), jnp.float32(0.0))) == pytest.approx(0.32)
+
+
+def test_reward_functions_and_termination():
+  ep = EpisodeConfig()
+  window = jnp.array([0.1, 0.2, 0.3, 0.0, 0.4])
+  upright = jnp.zeros(3)
+  for kind, expected in (("free", 0.0), ("cog", -0.05 * 0.2), ("angular", -0.05 * 0.2)):
+    mon = Monitor(RewardConfig(kind=kind), ep)
+    terms, prog, _, term, _ = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
+                                           upright, window, jnp.float32(1.0))
+    assert float(terms["progress"]) == pytest.approx(0.25)
+    assert float(terms["safety"]) == pytest.approx(expected)
+    assert not bool(term)
+  mon = Monitor(RewardConfig(kind="cog"), ep)
+  _, _, _, term, flags = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
+                                      jnp.array([0.0, 1.7, 0.0]), window, jnp.float32(1.0))
+  assert bool(term) and bool(flags["tipped"])
+  _, _, _, term, flags = mon.evaluate(jnp.float32(-0.01), jnp.float32(2.0), jnp.float32(2.0),
+                                      upright, window, jnp.float32(1.0))
+  assert bool(term) and bool(flags["reached"])
+  _, _, _, term, flags = mon.evaluate(jnp.float32(2.5), jnp.float32(2.0), jnp.float32(2.0),
+                                      upright, window, jnp.float32(1.0))
+  assert bool(term) and bool(flags["away"])  # 2.5 > 1.2 * 2.0
+
+
+def test_penalty_normalization_uses_the_first_episodes():
+  cfg = RewardConfig(normalize_penalties=True, normalize_episodes=3)
+  s = normalizer_init(cfg)
+  assert float(s.k) == 0.0  # no penalty while calibrating
+  s = normalizer_update(cfg, s, jnp.array([True, False, True]), jnp.array([0.2, 9.0, 0.4]))
+  assert float(s.k) == 0.0 and int(s.count) == 2
+  s = normalizer_update(cfg, s, jnp.array([True, True]), jnp.array([0.6, 100.0]))
+  assert float(s.k) == pytest.approx(3 / 1.2)  # 1 / mean(0.2, 0.4, 0.6); later episodes ignored
+  s2 = normalizer_update(cfg, s, jnp.array([True]), jnp.array([50.0]))
+  assert float(s2.k) == pytest.approx(float(s.k))
+  assert float(normalizer_init(RewardConfig()).k) == 1.0
