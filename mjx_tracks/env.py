@@ -130,7 +130,9 @@ class TrackedRobotEnv(Env):
     key, k_obs = jax.random.split(es.key)
     es = es.replace(data=data, targets=targets, closest=closest, window=window, key=key,
                     penalty_sum=es.penalty_sum + self.monitor.safety_scale() * jnp.mean(window))
-    metrics = self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)
+    # keys stay those of reset (wrappers may add their own): update values in place
+    metrics = {**state.metrics,
+               **self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)}
     reward = sum(terms.values())
     return state.replace(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=reward,
                          done=terminated.astype(jnp.float32), metrics=metrics)

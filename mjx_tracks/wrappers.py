@@ -9,7 +9,8 @@ The global state is kept, identical, in every environment's info (Brax expects b
 
 from __future__ import annotations
 
-from typing import Optional
+import dataclasses
+from typing import Callable, Optional
 
 import jax
 import jax.numpy as jnp
@@ -31,15 +32,25 @@ class GlobalStats:
 class CurriculumAutoReset(Wrapper):
   """Wraps a batched (Vmap + Episode) env of a TrackedRobotEnv."""
 
-  def __init__(self, env, core: TrackedRobotEnv, axis_name: Optional[str] = None):
+  def __init__(self, env, core: TrackedRobotEnv, axis_name: Optional[str] = None,
+               initial: Optional[GlobalStats] = None, report: Optional[Callable] = None):
     super().__init__(env)
     self.core = core
     self.axis_name = axis_name
+    self.initial = initial  # e.g. restored from a checkpoint
+    self.report = report  # host callback receiving the global state after every batched step
+
+  def initial_stats(self) -> GlobalStats:
+    if self.initial is not None:
+      return jax.tree_util.tree_map(jnp.asarray, self.initial)
+    return GlobalStats(self.core.curriculum.init(), normalizer_init(self.core.cfg.reward))
 
   def reset(self, rng: jax.Array) -> State:
     state = self.env.reset(rng)
     n = rng.shape[0]
-    glob = GlobalStats(self.core.curriculum.init(), normalizer_init(self.core.cfg.reward))
+    glob = self.initial_stats()
+    fresh = jax.vmap(self.core.reset_at, in_axes=(0, None, None))(rng, glob.curriculum.eps, glob.normalizer.k)
+    state = state.replace(pipeline_state=fresh.pipeline_state, obs=fresh.obs)
     state.info["global"] = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), glob)
     state.info["reset_key"] = jax.vmap(lambda k: jax.random.fold_in(k, 7))(rng)
     state.info["final_obs"] = state.obs
@@ -53,14 +64,16 @@ class CurriculumAutoReset(Wrapper):
     done = nstate.done.astype(bool)
     glob: GlobalStats = jax.tree_util.tree_map(lambda x: x[0], nstate.info["global"])
     ep = nstate.info["episode_metrics"]
-    cur = self.core.curriculum.update(glob.curriculum, done, ep["sum_reward"], ep["progress"],
-                                      self.axis_name)
+    axis = self.axis_name if _axis_bound(self.axis_name) else None
+    cur = self.core.curriculum.update(glob.curriculum, done, ep["sum_reward"], ep["progress"], axis)
     penalty_sums = nstate.pipeline_state.penalty_sum
-    if self.axis_name is not None:
-      gather = lambda x: jax.lax.all_gather(x, self.axis_name, tiled=True)
+    if axis is not None:
+      gather = lambda x: jax.lax.all_gather(x, axis, tiled=True)
       norm = normalizer_update(self.core.cfg.reward, glob.normalizer, gather(done), gather(penalty_sums))
     else:
       norm = normalizer_update(self.core.cfg.reward, glob.normalizer, done, penalty_sums)
+    if self.report is not None:
+      jax.debug.callback(self.report, GlobalStats(cur, norm))
     split = jax.vmap(jax.random.split)(nstate.info["reset_key"])
     fresh = jax.vmap(self.core.reset_at, in_axes=(0, None, None))(split[:, 0], cur.eps, norm.k)
 
@@ -79,15 +92,31 @@ class CurriculumAutoReset(Wrapper):
     return nstate.replace(pipeline_state=es, obs=where_done(fresh.obs, nstate.obs))
 
 
-def wrap_for_training(core: TrackedRobotEnv, axis_name: Optional[str] = None):
-  """A `wrap_env_fn` for brax.training.agents.{ppo,sac}.train: Vmap -> Episode -> curriculum reset."""
+def _axis_bound(axis_name: Optional[str]) -> bool:
+  """Whether a collective over axis_name is possible here (inside pmap / a named vmap)."""
+  if axis_name is None:
+    return False
+  try:
+    jax.lax.axis_index(axis_name)
+  except NameError:
+    return False
+  return True
+
+
+def wrap_for_training(core: TrackedRobotEnv, axis_name: Optional[str] = "i",
+                      initial: Optional[GlobalStats] = None, report: Optional[Callable] = None):
+  """A `wrap_env_fn` for brax.training.agents.{ppo,sac}.train: Vmap -> Episode -> curriculum reset.
+
+  axis_name is Brax's pmap axis ('i'): where it is bound (training on several devices) the
+  curriculum reduces across devices; where it is not (one device, evaluation) it stays local.
+  """
 
   def wrap(env, episode_length: int = 1000, action_repeat: int = 1, randomization_fn=None, **_):
     if randomization_fn is not None:
       raise ValueError("mjx_tracks environments randomize their scenes themselves; "
                        "randomization_fn is not supported")
     inner = EpisodeWrapper(VmapWrapper(env), episode_length, action_repeat)
-    return CurriculumAutoReset(inner, core, axis_name)
+    return CurriculumAutoReset(inner, core, axis_name, initial, report)
 
   return wrap
 
@@ -95,3 +124,18 @@ def wrap_for_training(core: TrackedRobotEnv, axis_name: Optional[str] = None):
 def batched_env(core: TrackedRobotEnv, axis_name: Optional[str] = None):
   """The task's batched environment with its own episode length and curriculum reset."""
   return wrap_for_training(core, axis_name)(core, core.cfg.episode.max_steps, 1)
+
+
+def global_stats_to_json(g: GlobalStats) -> dict:
+  """GlobalStats -> plain lists (for checkpoint metadata)."""
+  plain = lambda obj: {f.name: jnp.asarray(getattr(obj, f.name)).tolist() for f in dataclasses.fields(obj)}
+  return {"curriculum": plain(g.curriculum), "normalizer": plain(g.normalizer)}
+
+
+def global_stats_from_json(d: dict) -> GlobalStats:
+  c, n = d["curriculum"], d["normalizer"]
+  return GlobalStats(
+      CurriculumState(eps=jnp.float32(c["eps"]), returns=jnp.asarray(c["returns"], jnp.float32),
+                      progress=jnp.asarray(c["progress"], jnp.float32), head=jnp.int32(c["head"]),
+                      finished=jnp.int32(c["finished"]), updates=jnp.int32(c["updates"])),
+      PenaltyNormalizer(k=jnp.float32(n["k"]), total=jnp.float32(n["total"]), count=jnp.int32(n["count"])))

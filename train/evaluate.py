@@ -1,0 +1,152 @@
+"""`python -m train.evaluate RUN_DIR --trials 100 --scene hardest`: run a trained policy.
+
+Scenes: hardest (n = n_max, l = l_min, h = h_max of the task's ranges: the paper's highest
+complexity, 7 x 0.35 x 0.22 m by default), uniform (the task's ranges, uniform), incremental
+(the task's sampler at --eps), train (the task's own sampler at --eps). Trials run in parallel,
+one episode each, deterministic policy. Writes RUN_DIR/eval-<scene>.json (mean +- std of
+progress, success, COG deviation, |pitch rate|, tip-overs, episode length) and database rows.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime
+import json
+import os
+import sys
+
+import numpy as np
+
+from mjx_tracks.config import ConfigError, TaskConfig, from_dict
+
+SCENES = ("hardest", "uniform", "incremental", "train")
+
+
+def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
+  s = cfg.scene
+  if scene == "hardest":
+    if s.kind != "stairs":
+      raise ConfigError("scene 'hardest' exists for stair tasks only")
+    s = dataclasses.replace(s, sampler="uniform", tread=(s.tread[0], s.tread[0]),
+                            riser=(s.riser[1], s.riser[1]), steps=(s.steps[1], s.steps[1]))
+  elif scene == "uniform":
+    s = dataclasses.replace(s, sampler="uniform")
+  elif scene == "incremental":
+    s = dataclasses.replace(s, sampler="incremental")
+  return dataclasses.replace(cfg, scene=s)
+
+
+def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record: bool = False):
+  """Per-trial figures (dict of arrays) and, if record, qpos of trial 0 at every step."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.env import TrackedRobotEnv  # noqa: PLC0415
+  core = TrackedRobotEnv(cfg)
+  steps = cfg.episode.max_steps
+
+  def rollout(keys):
+    s = jax.vmap(core.reset_at, in_axes=(0, None, None))(keys, jnp.float32(eps), jnp.float32(1.0))
+    zeros = jnp.zeros(trials)
+    acc0 = {"progress": zeros, "success": zeros, "cog": zeros, "on": zeros, "pitch": zeros,
+            "tipped": zeros, "length": zeros}
+
+    def body(carry, _):
+      s, acc, active = carry
+      s = jax.vmap(core.step)(s, act(s.obs))
+      m = s.metrics
+      a = active.astype(jnp.float32)
+      acc = {"progress": acc["progress"] + a * m["progress"],
+             "success": jnp.maximum(acc["success"], a * m["goal_reached"]),
+             "cog": acc["cog"] + a * m["cog_deviation"], "on": acc["on"] + a * m["on_stairs"],
+             "pitch": acc["pitch"] + a * m["pitch_rate"],
+             "tipped": jnp.maximum(acc["tipped"], a * m["tipped_over"]), "length": acc["length"] + a}
+      return (s, acc, active & (s.done == 0)), s.pipeline_state.data.qpos[0]
+
+    (_, acc, _), qpos = jax.lax.scan(body, (s, acc0, jnp.ones(trials, bool)), None, length=steps)
+    scene0 = jax.tree_util.tree_map(lambda x: x[0], s.pipeline_state.scene)
+    return acc, jnp.concatenate([s.pipeline_state.data.qpos[:1], qpos]), scene0
+
+  acc, qpos, scene0 = jax.jit(rollout)(jax.random.split(jax.random.PRNGKey(seed), trials))
+  if record:  # put trial 0's scene into the C model used for rendering
+    ids = core.sim.layout.scene_boxes
+    core.sim.mj_model.geom_pos[ids] = np.asarray(scene0.box_pos)
+    core.sim.mj_model.geom_size[ids] = np.asarray(scene0.box_size)
+  acc = {k: np.asarray(v) for k, v in acc.items()}
+  per_trial = {
+      "progress": acc["progress"], "success": acc["success"],
+      "cog_deviation": np.where(acc["on"] > 0, acc["cog"] / np.maximum(acc["on"], 1), 0.0),
+      "pitch_rate": acc["pitch"] / np.maximum(acc["length"], 1), "tipped_over": acc["tipped"],
+      "length": acc["length"]}
+  return per_trial, (np.asarray(qpos) if record else None), core
+
+
+def main(argv: list[str] | None = None) -> int:
+  p = argparse.ArgumentParser(prog="python -m train.evaluate", description=__doc__.splitlines()[0])
+  p.add_argument("run_dir")
+  p.add_argument("--trials", type=int, default=100)
+  p.add_argument("--scene", choices=SCENES, default="hardest")
+  p.add_argument("--eps", type=float, default=1.0, help="difficulty for incremental / train scenes")
+  p.add_argument("--seed", type=int, default=1)
+  p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>.json)")
+  p.add_argument("--db", help="experiment database (default: beside the run directory)")
+  p.add_argument("--video", help="MP4 of trial 0 (needs the video extra)")
+  args = p.parse_args(argv)
+  run_json = os.path.join(args.run_dir, "run.json")
+  if not os.path.exists(run_json):
+    print(f"error: {args.run_dir} is not a run directory (no run.json)", file=sys.stderr)
+    return 2
+  if args.trials < 1 or not 0.0 <= args.eps <= 1.0:
+    print("error: --trials must be >= 1 and --eps in [0, 1]", file=sys.stderr)
+    return 2
+  import jax  # noqa: PLC0415
+
+  from train.policy import load_policy, load_policy_info  # noqa: PLC0415
+  with open(run_json) as f:
+    meta = json.load(f)
+  try:
+    cfg = scene_config(from_dict(meta["config"]), args.scene)
+    policy_dir = os.path.join(args.run_dir, "policy")
+    info = load_policy_info(policy_dir)
+    act = load_policy(policy_dir)
+  except (ConfigError, FileNotFoundError, ValueError) as e:
+    print(f"error: {e}", file=sys.stderr)
+    return 2
+  per_trial, qpos, core = run_trials(cfg, act, args.trials, args.eps, args.seed, bool(args.video))
+  stats = {k: {"mean": float(v.mean()), "std": float(v.std())} for k, v in per_trial.items()}
+  report = {
+      "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": args.scene,
+      "eps": args.eps if args.scene in ("incremental", "train") else None,
+      "trials": args.trials, "policy_step": info.get("step"), "metrics": stats,
+      "per_trial": {k: v.tolist() for k, v in per_trial.items()},
+      "device": str(jax.devices()[0]), "command": "python -m train.evaluate " + " ".join(argv or sys.argv[1:]),
+      "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
+  out = args.out or os.path.join(args.run_dir, f"eval-{args.scene}.json")
+  with open(out, "w") as f:
+    json.dump(report, f, indent=1)
+  from train.db import ExperimentDB, default_path  # noqa: PLC0415
+  db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(args.run_dir))))
+  try:
+    db.run(meta["run_id"])
+    db.log_evals(meta["run_id"], [
+        {"scene": args.scene, "trial": i, "progress": float(per_trial["progress"][i]),
+         "success": int(per_trial["success"][i] > 0), "cog_deviation": float(per_trial["cog_deviation"][i]),
+         "pitch_rate": float(per_trial["pitch_rate"][i]), "tipped_over": int(per_trial["tipped_over"][i] > 0),
+         "length": int(per_trial["length"][i])} for i in range(args.trials)])
+  except KeyError:
+    print(f"note: run {meta['run_id']} is not in {db.path}; trials not recorded there", file=sys.stderr)
+  if args.video:
+    from mjx_tracks.render import render_frames, write_video  # noqa: PLC0415
+    write_video(args.video, render_frames(core.sim.mj_model, qpos), fps=1 / cfg.control.period)
+  m = stats
+  print(f"{meta['task']} {args.scene}: {args.trials} trials, progress {m['progress']['mean']:.3f} +- "
+        f"{m['progress']['std']:.3f}, success {m['success']['mean']:.2f}, COG deviation "
+        f"{m['cog_deviation']['mean']:.3f} +- {m['cog_deviation']['std']:.3f} m, |pitch rate| "
+        f"{m['pitch_rate']['mean']:.3f} rad/s, tip-overs {m['tipped_over']['mean']:.2f}, length "
+        f"{m['length']['mean']:.1f} -> {out}")
+  return 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())

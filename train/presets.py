@@ -1,0 +1,78 @@
+"""Training presets: a CPU-sized one for trying things, tuned massively parallel ones for a GPU,
+and the paper's SAC set-up (2 x 64 MLP, initial entropy coefficient 0.5, tau 0.05, gamma 0.99)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+
+@dataclasses.dataclass(frozen=True)
+class PPOPreset:
+  num_envs: int = 4096
+  num_timesteps: int = 20_000_000
+  unroll_length: int = 20
+  batch_size: int = 256
+  num_minibatches: int = 16  # batch_size * num_minibatches must be a multiple of num_envs
+  num_updates_per_batch: int = 4
+  learning_rate: float = 3e-4
+  entropy_cost: float = 1e-2
+  discounting: float = 0.97
+  gae_lambda: float = 0.95
+  clipping_epsilon: float = 0.2
+  reward_scaling: float = 10.0
+  max_grad_norm: float = 1.0
+  policy_hidden: tuple[int, ...] = (128, 128, 128)
+  value_hidden: tuple[int, ...] = (256, 256, 256)
+  num_evals: int = 10
+  num_eval_envs: int = 256
+  training_metrics_steps: int = 500_000
+  config_overrides: tuple[str, ...] = ("scene.curriculum.window=1024",)
+
+
+@dataclasses.dataclass(frozen=True)
+class SACPreset:
+  num_envs: int = 256
+  num_timesteps: int = 5_000_000
+  batch_size: int = 512
+  learning_rate: float = 3e-4
+  discounting: float = 0.99
+  tau: float = 0.005
+  reward_scaling: float = 10.0  # brax's SAC starts at alpha = 1; scaling rewards by s acts like alpha = 1/s
+  grad_updates_per_step: int = 8
+  min_replay_size: int = 8192
+  max_replay_size: int = 1_000_000
+  hidden: tuple[int, ...] = (256, 256)
+  num_evals: int = 10
+  num_eval_envs: int = 256
+  config_overrides: tuple[str, ...] = ("scene.curriculum.window=256",)
+
+
+PRESETS: dict[str, dict[str, object]] = {
+    "ppo": {
+        "cpu": PPOPreset(num_envs=16, num_timesteps=2_560, unroll_length=8, batch_size=16,
+                         num_minibatches=4, num_updates_per_batch=2, policy_hidden=(32, 32),
+                         value_hidden=(32, 32), num_evals=2, num_eval_envs=8,
+                         training_metrics_steps=512, config_overrides=()),
+        "gpu": PPOPreset(),
+    },
+    "sac": {
+        "cpu": SACPreset(num_envs=8, num_timesteps=1_024, batch_size=32, grad_updates_per_step=1,
+                         min_replay_size=64, max_replay_size=10_000, hidden=(32, 32), num_evals=2,
+                         num_eval_envs=8, config_overrides=()),
+        "gpu": SACPreset(),
+        # paper: SB3 SAC, 2 x 64 MLP, ent_coef init 0.5 (reward scale 2 with brax's alpha = 1),
+        # tau 0.05, gamma 0.99, one robot, 20,000 control steps
+        "paper": SACPreset(num_envs=1, num_timesteps=20_000, batch_size=256, learning_rate=3e-4,
+                           discounting=0.99, tau=0.05, reward_scaling=2.0, grad_updates_per_step=1,
+                           min_replay_size=100, max_replay_size=1_000_000, hidden=(64, 64),
+                           num_evals=20, num_eval_envs=10, config_overrides=()),
+    },
+}
+
+
+def get_preset(algo: str, name: str):
+  if algo not in PRESETS:
+    raise ValueError(f"unknown algorithm {algo!r}; known: {sorted(PRESETS)}")
+  if name not in PRESETS[algo]:
+    raise ValueError(f"unknown preset {name!r} for {algo}; known: {sorted(PRESETS[algo])}")
+  return PRESETS[algo][name]

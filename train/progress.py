@@ -1,0 +1,84 @@
+"""Progress reporting: a status line per report, TensorBoard scalars, and database rows."""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+
+def summarize(metrics: dict[str, Any]) -> dict[str, float]:
+  """Episode figures from brax's training ('episode/...') or evaluation ('eval/episode_...') metrics."""
+  m = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
+  if "episode/sum_reward" in m:
+    get = lambda k: m.get(f"episode/{k}")
+    ret, length = get("sum_reward"), get("length")
+  elif "eval/episode_reward" in m:
+    get = lambda k: m.get(f"eval/episode_{k}")
+    ret, length = m["eval/episode_reward"], m.get("eval/avg_episode_length")
+  else:
+    return {}
+  on = get("on_stairs") or 0.0
+  out = {"return_mean": ret, "progress_mean": get("progress"), "tipped_rate": get("tipped_over"),
+         "success_rate": get("goal_reached"),
+         "cog_deviation_mean": (get("cog_deviation") or 0.0) / on if on > 0 else 0.0,
+         "pitch_rate_mean": (get("pitch_rate") or 0.0) / length if length else None}
+  return {k: v for k, v in out.items() if v is not None}
+
+
+class Reporter:
+  """Called with (global step, brax metrics); prints, logs to TensorBoard and the database."""
+
+  def __init__(self, total_steps: int, start_step: int, db=None, run_id: str | None = None,
+               tb_dir: str | None = None, eps_source=None, stream=sys.stdout):
+    self.total, self.start_step = total_steps, start_step
+    self.db, self.run_id = db, run_id
+    self.eps_source = eps_source
+    self.stream = stream
+    self.t0 = time.time()
+    self.last: tuple[float, int] | None = None
+    self.latest: dict[str, float] = {}
+    self.writer = None
+    if tb_dir:
+      from tensorboardX import SummaryWriter  # noqa: PLC0415
+      self.writer = SummaryWriter(tb_dir)
+
+  def __call__(self, step: int, metrics: dict[str, Any]) -> dict[str, float]:
+    now = time.time()
+    sps = None
+    if self.last is not None and step > self.last[1]:
+      sps = (step - self.last[1]) / max(now - self.last[0], 1e-9)
+    self.last = (now, step)
+    fig = summarize(metrics)
+    eps = self.eps_source() if self.eps_source else None
+    row = {"step": step, "wall_s": now - self.t0, "steps_per_s": sps, "eps": eps, **fig}
+    if fig:
+      self.latest = {k: v for k, v in row.items() if v is not None}
+    kind = "eval" if any(k.startswith("eval/") for k in metrics) else "train"
+    self._print(row, kind)
+    scalars = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
+    if self.writer:
+      for k, v in {**scalars, **{f"summary/{k}": v for k, v in row.items() if v is not None}}.items():
+        self.writer.add_scalar(k, v, step)
+      self.writer.flush()
+    if self.db is not None and fig:
+      self.db.log_stats(self.run_id, row, scalars)
+    return row
+
+  def _print(self, row: dict, kind: str) -> None:
+    f = lambda k, fmt: (fmt.format(row[k]) if row.get(k) is not None else "-")
+    elapsed = row["wall_s"]
+    done = (row["step"] - self.start_step) / max(self.total - self.start_step, 1)
+    eta = elapsed / done - elapsed if done > 0 else float("nan")
+    print(f"[{kind:5s}] {row['step']:>11,}/{self.total:,} ({100 * row['step'] / max(self.total, 1):5.1f}%) "
+          f"{f('steps_per_s', '{:,.0f}')} steps/s | return {f('return_mean', '{:.3f}')} | "
+          f"progress {f('progress_mean', '{:.3f}')} | eps {f('eps', '{:.2f}')} | "
+          f"cog {f('cog_deviation_mean', '{:.3f}')} m | pitch rate {f('pitch_rate_mean', '{:.2f}')} rad/s | "
+          f"tipped {f('tipped_rate', '{:.1%}')} | success {f('success_rate', '{:.1%}')} | "
+          f"{elapsed:,.0f} s, eta {eta:,.0f} s", file=self.stream, flush=True)
+
+  def close(self) -> None:
+    if self.writer:
+      self.writer.close()
