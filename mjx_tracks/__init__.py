@@ -5,10 +5,12 @@ After `import mjx_tracks`, every task in configs/ is registered with Gymnasium a
 returns the task's Brax environment.
 """
 
+import ctypes.util
 import os
 
-# Offscreen rendering needs its GL backend chosen before mujoco is first imported.
-if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+# Offscreen rendering needs its GL backend chosen before mujoco is first imported: EGL where
+# the machine has it and no display (a GPU host without libEGL keeps mujoco's default).
+if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY") and ctypes.util.find_library("EGL"):
   os.environ["MUJOCO_GL"] = "egl"
 
 
