@@ -56,9 +56,9 @@ class BeamLayout:
       rows = centres(h / 2 - band_px / 2, h / 2 + band_px / 2, rc)
       uu, vv = np.meshgrid(cols, rows)
       us.append(uu.ravel()); vs.append(vv.ravel()); bands.append(np.full(uu.size, n_vertical + k))
-    u, v = np.concatenate(us), np.concatenate(vs)
+    u, v = np.concatenate(us or [np.zeros(0)]), np.concatenate(vs or [np.zeros(0)])
     dirs = np.stack([(u - w / 2) / f, -(v - h / 2) / f, -np.ones_like(u)], axis=-1).astype(np.float32)
-    return BeamLayout(dirs, np.concatenate(bands).astype(np.int32), n_vertical + n_horizontal,
+    return BeamLayout(dirs, np.concatenate(bands or [np.zeros(0)]).astype(np.int32), n_vertical + n_horizontal,
                       tuple(depth_range), far, noise)
 
   @property

@@ -1,8 +1,8 @@
 """Monitor (paper Section 4.3): reward terms, termination and safety figures, all pure JAX.
 
 Progress (the original's "closest distance so far" rule): dist = |p - goal| - tolerance; whenever
-dist falls below the closest distance so far, the robot earns (closest - dist) / d0, d0 the
-starting dist; an episode's progress rewards sum to at most 1.
+dist falls below the closest distance so far, the robot earns (closest - max(dist, 0)) / d0, d0 the
+starting dist; an episode's progress rewards sum to at most 1 (the fraction of d0 covered).
 COG deviation (ascent, while on the stairs): with r the centre of mass relative to the chassis
 origin, expressed in a frame tilted by the stair incline theta = atan(h / l) (x' along the incline,
 z' normal to it), Cx = x' - tan|theta| z' and deviation = sqrt(z'^2 + Cx^2), clipped to [0, 0.32] m.
@@ -35,7 +35,8 @@ def goal_distance(pos: jax.Array, goal: jax.Array, tolerance: float) -> jax.Arra
 
 
 def progress_step(dist: jax.Array, closest: jax.Array, d0: jax.Array) -> tuple[jax.Array, jax.Array]:
-  """(progress reward, new closest distance)."""
+  """(progress reward, new closest distance); distances below 0 (goal reached) count as 0."""
+  dist = jnp.maximum(dist, 0.0)
   gain = jnp.maximum(closest - dist, 0.0) / jnp.maximum(d0, 1e-6)
   return gain, jnp.minimum(closest, dist)
 

@@ -20,8 +20,11 @@ def test_moving_half_a_metre_toward_a_goal_two_metres_away_earns_a_quarter():
   back = goal_distance(jnp.array([0.2, 0, 0]), goal, 0.3)
   r2, closest2 = progress_step(back, closest, d0)
   assert float(r2) == 0.0 and float(closest2) == pytest.approx(1.5)
-  r3, _ = progress_step(goal_distance(jnp.array([1.0, 0, 0]), goal, 0.3), closest2, d0)
+  r3, closest3 = progress_step(goal_distance(jnp.array([1.0, 0, 0]), goal, 0.3), closest2, d0)
   assert float(r3) == pytest.approx(0.25)
+  # overshooting the goal completes the episode's progress at exactly 1 in total
+  r4, _ = progress_step(goal_distance(jnp.array([2.2, 0, 0]), goal, 0.3), closest3, d0)
+  assert float(r + r3 + r4) == pytest.approx(1.0)
 
 
 def test_cog_deviation_hand_cases():

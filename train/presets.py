@@ -26,6 +26,7 @@ class PPOPreset:
   num_evals: int = 10
   num_eval_envs: int = 256
   training_metrics_steps: int = 500_000
+  run_evals: bool = True  # brax's evaluation on a separate env (uniform scenes) at each eval point
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=1024",)
 
 
@@ -52,7 +53,7 @@ PRESETS: dict[str, dict[str, object]] = {
         "cpu": PPOPreset(num_envs=16, num_timesteps=2_560, unroll_length=8, batch_size=16,
                          num_minibatches=4, num_updates_per_batch=2, policy_hidden=(32, 32),
                          value_hidden=(32, 32), num_evals=2, num_eval_envs=8,
-                         training_metrics_steps=512, config_overrides=()),
+                         training_metrics_steps=512, run_evals=False, config_overrides=()),
         "gpu": PPOPreset(),
     },
     "sac": {

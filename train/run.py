@@ -194,6 +194,7 @@ def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
           max_grad_norm=p.max_grad_norm, normalize_observations=True,
           network_factory=spec.factory(), num_evals=p.num_evals, num_eval_envs=p.num_eval_envs,
           log_training_metrics=True, training_metrics_steps=p.training_metrics_steps,
+          run_evals=p.run_evals,
           progress_fn=progress, policy_params_fn=lambda s, _, prm: save(start_step + s, prm),
           restore_params=restore_ppo_params(raw, spec) if raw is not None else None,
           seed=plan.seed)
@@ -209,12 +210,11 @@ def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
           raise RunError(f"--resume: SAC checkpoint {restore_path} is missing")
 
       def sac_progress(step, metrics):
-        steps = sorted((int(d) for d in os.listdir(brax_dir) if d.isdigit()), default=[]) \
-            if os.path.isdir(brax_dir) else []
-        if steps:
-          path = os.path.join(brax_dir, f"{steps[-1]:012d}" if not os.path.exists(os.path.join(brax_dir, str(steps[-1]))) else str(steps[-1]))
-          meta_base["brax_checkpoint"] = path
-          save(start_step + step, brax_ckpt.load(path))
+        # brax saved this evaluation's parameters under brax_sac/<zero-padded step>/
+        names = sorted(d for d in os.listdir(brax_dir) if d.isdigit()) if os.path.isdir(brax_dir) else []
+        if names:
+          meta_base["brax_checkpoint"] = os.path.join(brax_dir, names[-1])
+          save(start_step + step, brax_ckpt.load(meta_base["brax_checkpoint"]))
         progress(step, metrics)
 
       _, params, _ = sac.train(

@@ -1,0 +1,158 @@
+"""Training end to end on the CPU: tiny PPO and SAC runs, resume, export -> load -> act,
+evaluation report, experiment database, bad input."""
+
+import glob
+import json
+import multiprocessing
+import os
+import shutil
+
+import jax
+import numpy as np
+import pytest
+
+from train import db as dbmod
+from train import evaluate, run
+from train.checkpoints import RunCheckpoints
+
+# a small task variant: no beams, short episodes (compiles and runs quickly on a CPU)
+TINY = ["--set", "observation.parts=[v, flippers_paired, arm, pitch]", "--set", "episode.max_steps=8"]
+
+
+@pytest.fixture(scope="module")
+def ppo_run(tmp_path_factory):
+  root = tmp_path_factory.mktemp("runs")
+  out, database = str(root / "ppo"), str(root / "db.sqlite")
+  rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "1024", "--out", out,
+                 "--db", database, *TINY])
+  assert rc == 0
+  return out, database
+
+
+def _run_id(out):
+  with open(os.path.join(out, "run.json")) as f:
+    return json.load(f)["run_id"]
+
+
+def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):
+  out, database = ppo_run
+  steps = RunCheckpoints(out).mgr.all_steps()
+  assert steps and max(steps) >= 1024
+  assert os.path.exists(os.path.join(out, "policy", "policy.json"))
+  assert glob.glob(os.path.join(out, "tb", "events.out.tfevents.*"))
+  d = dbmod.ExperimentDB(database)
+  row = d.run(_run_id(out))
+  assert row["status"] == "done" and row["task"] == "asc-inc-cog" and row["algo"] == "ppo"
+  stats = d.stats(row["run_id"])
+  assert len(stats) >= 2 and all(s["return_mean"] is not None for s in stats)
+  assert any(s["eps"] is not None for s in stats)
+
+
+def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
+  from flax import serialization
+  from train.networks import NetworkSpec
+  from train.policy import load_policy
+  import mjx_tracks
+  out, _ = ppo_run
+  raw, meta = RunCheckpoints(out).restore()
+  spec = NetworkSpec.from_json(meta["network"])
+  params = serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
+  reference = spec.make_inference_fn()(params, deterministic=True)
+  act = load_policy(os.path.join(out, "policy"))
+  env = mjx_tracks.load("asc-inc-cog", ["observation.parts=[v, flippers_paired, arm, pitch]",
+                                         "episode.max_steps=8"])
+  obs = jax.vmap(env.reset)(jax.random.split(jax.random.PRNGKey(0), 5)).obs
+  a = np.asarray(act(obs))
+  np.testing.assert_allclose(a, np.asarray(reference(obs, jax.random.PRNGKey(1))[0]), atol=1e-6)
+  assert a.shape == (5, env.action_size) and np.abs(a).max() <= 1.0
+
+
+def test_resume_continues_from_the_saved_step_and_curriculum(ppo_run, tmp_path):
+  out, database = ppo_run
+  copy = str(tmp_path / "resumed")
+  shutil.copytree(out, copy)
+  ck = RunCheckpoints(copy)
+  before_step = ck.latest_step()
+  _, before = ck.restore()
+  assert run.main(["--resume", copy, "--steps", str(before_step + 1024), "--db", database]) == 0
+  ck = RunCheckpoints(copy)
+  assert ck.latest_step() > before_step
+  _, after = ck.restore()
+  c0, c1 = before["global"]["curriculum"], after["global"]["curriculum"]
+  assert c1["finished"] > c0["finished"] > 0  # the curriculum kept counting from where it was
+
+
+def test_evaluation_writes_a_valid_report(ppo_run, tmp_path):
+  out, database = ppo_run
+  report = str(tmp_path / "eval.json")
+  assert evaluate.main([out, "--trials", "4", "--scene", "hardest", "--out", report, "--db", database]) == 0
+  with open(report) as f:
+    r = json.load(f)
+  assert r["trials"] == 4 and r["scene"] == "hardest"
+  for k in ("progress", "success", "cog_deviation", "pitch_rate", "tipped_over", "length"):
+    assert set(r["metrics"][k]) == {"mean", "std"} and len(r["per_trial"][k]) == 4
+  assert 0.0 <= r["metrics"]["progress"]["mean"] <= 1.0 + 1e-6
+  assert len(dbmod.ExperimentDB(database).evals(_run_id(out))) == 4
+
+
+def test_sac_tiny_run_trains_and_exports(tmp_path):
+  from train.policy import load_policy
+  out = str(tmp_path / "sac")
+  rc = run.main(["--task", "des-inc-ang", "--algo", "sac", "--preset", "cpu", "--steps", "256",
+                 "--out", out, "--db", str(tmp_path / "db.sqlite"), *TINY])
+  assert rc == 0
+  act = load_policy(os.path.join(out, "policy"))
+  assert np.asarray(act(np.zeros((2, 6), np.float32))).shape == (2, 5)
+  assert dbmod.ExperimentDB(str(tmp_path / "db.sqlite")).run(_run_id(out))["status"] == "done"
+
+
+def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path, capsys):
+  out, _ = ppo_run
+  assert run.main(["--task", "flying", "--out", str(tmp_path / "x")]) == 2
+  assert "unknown task 'flying'" in capsys.readouterr().err
+  assert run.main(["--task", "asc-inc-cog", "--set", "reward.cog_scal=1", "--out", str(tmp_path / "y")]) == 2
+  assert "reward.cog_scal: unknown key" in capsys.readouterr().err
+  before = open(os.path.join(out, "run.json")).read()
+  assert run.main(["--task", "asc-inc-cog", "--out", out]) == 2
+  assert "already holds run" in capsys.readouterr().err
+  assert open(os.path.join(out, "run.json")).read() == before
+  assert run.main(["--resume", str(tmp_path)]) == 2
+  assert "no run.json" in capsys.readouterr().err
+  # a run directory whose checkpoints are gone or damaged
+  broken = str(tmp_path / "broken")
+  shutil.copytree(out, broken)
+  shutil.rmtree(os.path.join(broken, "checkpoints"))
+  assert run.main(["--resume", broken, "--db", str(tmp_path / "db2.sqlite")]) == 2
+  assert "no checkpoint" in capsys.readouterr().err
+  assert evaluate.main([str(tmp_path), "--trials", "2"]) == 2
+
+
+def _write_rows(path, run_id, n):
+  d = dbmod.ExperimentDB(path)
+  for i in range(n):
+    d.log_stats(run_id, {"step": i, "return_mean": float(i)}, {"x": float(i)})
+
+
+def test_concurrent_writers_do_not_corrupt_the_database(tmp_path):
+  path = str(tmp_path / "shared.sqlite")
+  d = dbmod.ExperimentDB(path)
+  for rid in ("a", "b"):
+    d.start(rid, "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path), 10)
+  ctx = multiprocessing.get_context("spawn")
+  procs = [ctx.Process(target=_write_rows, args=(path, rid, 150)) for rid in ("a", "b")]
+  for p in procs:
+    p.start()
+  for p in procs:
+    p.join(60)
+  assert all(p.exitcode == 0 for p in procs)
+  assert len(d.stats("a")) == 150 and len(d.stats("b")) == 150
+
+
+def test_a_run_whose_process_died_reads_crashed(tmp_path):
+  d = dbmod.ExperimentDB(str(tmp_path / "c.sqlite"))
+  d.start("dead", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path), 10)
+  with d._conn() as c:
+    c.execute("UPDATE experiments SET pid=? WHERE run_id='dead'", (2**22 + 12345,))
+  assert d.run("dead")["status"] == "crashed"
+  assert dbmod.main(["--db", str(tmp_path / "c.sqlite"), "list"]) == 0
+  assert dbmod.main(["--db", str(tmp_path / "c.sqlite"), "show", "nope"]) == 2
