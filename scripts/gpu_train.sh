@@ -2,7 +2,7 @@
 # On the GPU host: optionally the environment benchmark, then for each TASK train with the GPU PPO
 # preset for STEPS environment steps and evaluate on the hardest staircase (100 trials).
 # Results go to $OUT: bench_env.json, <task>_train.log, <task>_curve.csv, <task>_eval_hardest.json,
-# <task>_run.json.   Usage: BENCH=1 bash scripts/gpu_train.sh STEPS TASK [TASK ...]
+# <task>_run.json.   Usage: BENCH=1 TRAIN_ARGS="--set k=v" bash scripts/gpu_train.sh STEPS TASK [TASK ...]
 set -uo pipefail
 steps=$1; shift
 export PYTHONUNBUFFERED=1
@@ -13,7 +13,7 @@ for task in "$@"; do
   run=/tmp/runs/$task
   rm -rf "$run"
   start=$(date +%s)
-  python3 -m train.run --task "$task" --preset gpu --steps "$steps" --out "$run" 2>&1 \
+  python3 -m train.run --task "$task" --preset gpu --steps "$steps" --out "$run" ${TRAIN_ARGS:-} 2>&1 \
     | grep -v -i "warp\|warn" | tee "$OUT/${task}_train.log"
   echo "train wall_s $(( $(date +%s) - start )) (includes compilation)" | tee -a "$OUT/${task}_train.log"
   python3 -m train.evaluate "$run" --trials 100 --scene hardest --out "$OUT/${task}_eval_hardest.json" 2>&1 \
