@@ -5,6 +5,7 @@ import pathlib
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 
+import mjx_tracks  # noqa: E402,F401  (first: picks the headless GL backend before mujoco loads)
 import jax  # noqa: E402
 import pytest  # noqa: E402
 
