@@ -160,8 +160,9 @@ class TaskConfig:
       if dataclasses.is_dataclass(v):
         v.validate(f.name)
     if self.scene.kind == "nav":
-      _check("w" in __import__("mjx_tracks.control", fromlist=["x"]).CONTROL_MODES[self.control.mode],
-             "control.mode", "navigation needs a mode with angular velocity w")
+      from mjx_tracks.control import CONTROL_MODES  # noqa: PLC0415
+      _check("w" in CONTROL_MODES[self.control.mode], "control.mode",
+             "navigation needs a mode with angular velocity w")
     steps = self.control.period / self.physics.timestep
     _check(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
 

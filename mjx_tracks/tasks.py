@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from mjx_tracks.config import TaskConfig, available_tasks, load_config
+from mjx_tracks.config import available_tasks, load_config
 from mjx_tracks.env import TrackedRobotEnv
 
 
@@ -13,8 +13,4 @@ def load(task: str, overrides: Sequence[str] = ()) -> TrackedRobotEnv:
   return TrackedRobotEnv(load_config(task, overrides))
 
 
-def from_config(cfg: TaskConfig) -> TrackedRobotEnv:
-  return TrackedRobotEnv(cfg)
-
-
-__all__ = ["available_tasks", "from_config", "load", "load_config"]
+__all__ = ["available_tasks", "load", "load_config"]

@@ -11,14 +11,17 @@ from scenes.navigation import AREA_W, NavScene
 from scenes.staircase import LANDING_LENGTH, StairScene
 
 
-def _c_model_from_xi(l: float, h: float, n: int) -> mujoco.MjModel:
-  """Independent oracle: one box per step written out by hand from (l, h, n)."""
+def _c_model_from_xi(l: float, h: float, n: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+  """Independent oracle: one box per step written out by hand from (l, h, n), after mj_forward."""
   geoms = []
   for k in range(n):
     length = LANDING_LENGTH if k == n - 1 else l
     geoms.append(f'<geom type="box" pos="{k * l + length / 2} 0 {(k + 1) * h / 2}" '
                  f'size="{length / 2} 1 {(k + 1) * h / 2}"/>')
-  return mujoco.MjModel.from_xml_string(f"<mujoco><worldbody>{''.join(geoms)}</worldbody></mujoco>")
+  c = mujoco.MjModel.from_xml_string(f"<mujoco><worldbody>{''.join(geoms)}</worldbody></mujoco>")
+  d = mujoco.MjData(c)
+  mujoco.mj_forward(c, d)
+  return c, d
 
 
 @pytest.fixture(scope="module")
@@ -44,9 +47,7 @@ def test_step_boxes_sit_where_xi_says(batch):
   s, xpos, size, _ = batch
   for i in range(xpos.shape[0]):
     l, h, n = (float(s.xi[i, 0]), float(s.xi[i, 1]), int(s.xi[i, 2]))
-    c = _c_model_from_xi(l, h, n)
-    d = mujoco.MjData(c)
-    mujoco.mj_forward(c, d)
+    c, d = _c_model_from_xi(l, h, n)
     np.testing.assert_allclose(np.asarray(xpos[i, :n]), d.geom_xpos, atol=1e-5)
     np.testing.assert_allclose(np.asarray(size[i, :n]), c.geom_size, atol=1e-5)
     assert (np.asarray(xpos[i, n:, 2]) < -5).all()  # unused steps parked below the floor
@@ -56,9 +57,7 @@ def test_ray_straight_down_over_each_tread_hits_its_height(batch):
   s, _, _, rays = batch
   for i in range(rays.shape[0]):
     l, h, n = (float(s.xi[i, 0]), float(s.xi[i, 1]), int(s.xi[i, 2]))
-    c = _c_model_from_xi(l, h, n)
-    d = mujoco.MjData(c)
-    mujoco.mj_forward(c, d)
+    c, d = _c_model_from_xi(l, h, n)
     for k in range(n):
       expected = 5.0 - (k + 1) * h
       gid = np.zeros(1, np.int32)

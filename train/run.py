@@ -22,7 +22,7 @@ from typing import Any
 
 from mjx_tracks.config import ConfigError, TaskConfig, from_dict, load_config
 from train.db import ExperimentDB, default_path
-from train.presets import PPOPreset, SACPreset, get_preset
+from train.presets import PPOPreset, get_preset
 
 EARLY_STOP_RETURN = {"up": 0.5, "down": 0.6}  # the paper's thresholds (mean return of recent episodes)
 

@@ -2,18 +2,13 @@
 
 import math
 
-from mjx_tracks.robots.spec import CapsuleSegment, FlipperSpec, RobotSpec
+from mjx_tracks.robots.spec import CapsuleSegment, RobotSpec, four_flippers
 
 # Flipper belt tapering from r = 0.10 m at the pivot to r = 0.04 m at the tip, 0.25 m out.
 _FLIPPER_SEGMENTS = (
     CapsuleSegment(start=0.0, end=0.12, radius=0.08),
     CapsuleSegment(start=0.12, end=0.25, radius=0.05),
 )
-
-
-def _flipper(name: str, direction: float, side: float) -> FlipperSpec:
-  return FlipperSpec(name=name, pivot=(0.25 * direction, 0.255 * side, 0.0),
-                     direction=direction, side=side, segments=_FLIPPER_SEGMENTS, mass=1.0)
 
 
 # Length: 2 x 0.25 (pivots) + 2 x (0.25 + 0.05) (flippers) = 1.1 m plus belt thickness ~ 1.196 m;
@@ -28,12 +23,7 @@ ABSOLEM = RobotSpec(
     track_y=0.195,
     track=CapsuleSegment(start=-0.25, end=0.25, radius=0.10),
     track_mass=4.0,
-    flippers=(
-        _flipper("front_left", +1.0, +1.0),
-        _flipper("front_right", +1.0, -1.0),
-        _flipper("rear_left", -1.0, +1.0),
-        _flipper("rear_right", -1.0, -1.0),
-    ),
+    flippers=four_flippers(0.25, 0.255, _FLIPPER_SEGMENTS, mass=1.0),
     flipper_limit=math.pi / 4,
     arm=None,
     camera_pos=(0.25, 0.0, 0.32),

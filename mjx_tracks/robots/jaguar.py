@@ -2,7 +2,7 @@
 
 import math
 
-from mjx_tracks.robots.spec import ArmSpec, CapsuleSegment, FlipperSpec, RobotSpec
+from mjx_tracks.robots.spec import ArmSpec, CapsuleSegment, RobotSpec, four_flippers
 
 # Flipper belt: roller r = 0.09 m at the pivot tapering to r = 0.035 m at the tip, 0.23 m out
 # (REFERENCE.md). Approximated by two capsules whose union follows the taper.
@@ -10,12 +10,6 @@ _FLIPPER_SEGMENTS = (
     CapsuleSegment(start=0.0, end=0.11, radius=0.075),
     CapsuleSegment(start=0.11, end=0.23, radius=0.045),
 )
-
-
-def _flipper(name: str, direction: float, side: float) -> FlipperSpec:
-  # pivots coaxial with the side tracks' end rollers, outside them: (+-0.23, +-0.315) m
-  return FlipperSpec(name=name, pivot=(0.23 * direction, 0.315 * side, 0.0),
-                     direction=direction, side=side, segments=_FLIPPER_SEGMENTS, mass=0.5)
 
 
 JAGUAR = RobotSpec(
@@ -28,12 +22,8 @@ JAGUAR = RobotSpec(
     track_y=0.245,
     track=CapsuleSegment(start=-0.23, end=0.23, radius=0.09),
     track_mass=3.03,
-    flippers=(
-        _flipper("front_left", +1.0, +1.0),
-        _flipper("front_right", +1.0, -1.0),
-        _flipper("rear_left", -1.0, +1.0),
-        _flipper("rear_right", -1.0, -1.0),
-    ),
+    # pivots coaxial with the side tracks' end rollers, outside them: (+-0.23, +-0.315) m
+    flippers=four_flippers(0.23, 0.315, _FLIPPER_SEGMENTS, mass=0.5),
     flipper_limit=math.pi / 4,
     arm=ArmSpec(base=(0.0, 0.0, 0.11), link1_length=0.34, link1_mass=1.0,
                 link2_length=0.15, link2_mass=0.5, fixed_length=0.15, fixed_mass=0.5,

@@ -28,6 +28,16 @@ class FlipperSpec:
   mass: float  # kg
 
 
+def four_flippers(pivot_x: float, pivot_y: float, segments: tuple[CapsuleSegment, ...],
+                  mass: float) -> tuple[FlipperSpec, ...]:
+  """Front-left, front-right, rear-left, rear-right flippers on pivots at (+-x, +-y, 0) m."""
+  return tuple(
+      FlipperSpec(name=f"{end}_{side_name}", pivot=(pivot_x * direction, pivot_y * side, 0.0),
+                  direction=direction, side=side, segments=segments, mass=mass)
+      for end, direction in (("front", 1.0), ("rear", -1.0))
+      for side_name, side in (("left", 1.0), ("right", -1.0)))
+
+
 @dataclasses.dataclass(frozen=True)
 class ArmSpec:
   """A two-joint arm with a fixed link and a payload (robot 1)."""
