@@ -54,6 +54,7 @@ class CurriculumAutoReset(Wrapper):
     state.info["global"] = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), glob)
     state.info["reset_key"] = jax.vmap(lambda k: jax.random.fold_in(k, 7))(rng)
     state.info["final_obs"] = state.obs
+    state.info["eps"] = jnp.broadcast_to(glob.curriculum.eps, (n,))
     return state
 
   def step(self, state: State, action: jax.Array) -> State:
