@@ -30,3 +30,15 @@ def write_video(path: str, frames: list[np.ndarray], fps: float) -> None:
   except ImportError as e:
     raise SystemExit("error: --video needs the video extra: pip install 'mjx-tracks[video]'") from e
   imageio.mimwrite(path, frames, fps=fps, macro_block_size=1)
+
+
+def render_depth(mj_model, qpos: np.ndarray, camera: str = "depth_camera") -> np.ndarray:
+  """The robot's real depth image (m, z-depth) at its camera resolution, for notebooks / debugging."""
+  data = mujoco.MjData(mj_model)
+  data.qpos[:] = qpos
+  mujoco.mj_forward(mj_model, data)
+  w, h = mj_model.vis.global_.offwidth, mj_model.vis.global_.offheight
+  with mujoco.Renderer(mj_model, h, w) as renderer:
+    renderer.enable_depth_rendering()
+    renderer.update_scene(data, camera=camera)
+    return renderer.render().copy()

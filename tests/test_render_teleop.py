@@ -1,0 +1,45 @@
+"""Real depth image against ray casting; keyboard teleop key mapping."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from mjx_tracks.control import INCREMENT
+from mjx_tracks.render import render_depth
+from mjx_tracks.teleop import apply_key
+
+
+def test_depth_image_centre_matches_a_ray_along_the_camera_axis(jaguar_stairs):
+  sim = jaguar_stairs
+  mj = sim.mj_model
+  ids = sim.layout.scene_boxes
+  mj.geom_pos[ids[0]], mj.geom_size[ids[0]] = (1.5, 0, 0.5), (0.5, 1.0, 0.5)  # a block ahead
+  qpos = mj.qpos0.copy()
+  qpos[2] = sim.robot.spawn_height
+  depth = render_depth(mj, qpos)
+  assert depth.shape == (480, 640)
+  data = mujoco.MjData(mj)
+  data.qpos[:] = qpos
+  mujoco.mj_forward(mj, data)
+  cam = sim.layout.camera_site
+  axis = -data.site_xmat[cam].reshape(3, 3)[:, 2]  # the camera looks along its -z
+  oracle = mujoco.mj_ray(mj, data, data.site_xpos[cam], axis, np.array([1, 0, 0, 0, 0, 0], np.uint8),
+                         1, -1, np.zeros(1, np.int32))
+  centre = depth[239:241, 319:321].mean()
+  assert oracle > 0 and centre == pytest.approx(oracle, abs=0.01)
+
+
+def test_keys_drive_speeds_and_clip_joint_targets():
+  limits = np.array([[-0.78, 0.78]] * 4 + [[-1.3, 1.3], [-2.9, 2.9]])
+  v, w, t, quit_ = apply_key("w", 0.0, 0.0, np.zeros(6), limits, 1.0)
+  assert (v, w, quit_) == (pytest.approx(0.1), 0.0, False)
+  v, w, t, _ = apply_key("a", v, w, t, limits, 1.0)
+  assert w == pytest.approx(0.2)
+  for _ in range(20):
+    v, w, t, _ = apply_key("i", v, w, t, limits, 1.0)
+  np.testing.assert_allclose(t[:2], 0.78)  # front pair raised, clipped at the limit
+  v, w, t, _ = apply_key("o", v, w, t, limits, 1.0)
+  np.testing.assert_allclose(t[2:4], INCREMENT / 2)
+  v, w, _, _ = apply_key(" ", v, w, t, limits, 1.0)
+  assert (v, w) == (0.0, 0.0)
+  assert apply_key("q", v, w, t, limits, 1.0)[3]
