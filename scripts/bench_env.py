@@ -7,7 +7,6 @@ python scripts/bench_env.py [--task asc-inc-cog] [--envs 1024,4096,16384] [--rep
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import sys
 import time
@@ -17,6 +16,7 @@ import jax.numpy as jnp
 
 import mjx_tracks
 from mjx_tracks.wrappers import batched_env
+from result_file import write_result
 
 
 def timed(fn, state, make_args, reps):
@@ -59,13 +59,7 @@ def main(argv=None) -> int:
            "env_compile_s": round(env_compile, 2), "bare_compile_s": round(sim_compile, 2)}
     rows.append(row)
     print(json.dumps(row), flush=True)
-  result = {"task": args.task, "device": str(jax.devices()[0]), "device_kind": jax.devices()[0].device_kind,
-            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-            "command": "python scripts/bench_env.py " + " ".join(argv or sys.argv[1:]),
-            "jax": jax.__version__, "rows": rows}
-  if args.out:
-    with open(args.out, "w") as f:
-      json.dump(result, f, indent=1)
+  write_result(args.out, rows, task=args.task)
   return 0
 
 

@@ -9,9 +9,7 @@ n ~ U{1..7}) and drives toward it at 0.5 m/s with random flipper targets.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
-import platform
 import sys
 import time
 
@@ -19,6 +17,7 @@ import jax
 import jax.numpy as jnp
 
 from mjx_tracks.robots import get_robot
+from result_file import write_result
 from mjx_tracks.sim import staircase_simulator
 from scenes import staircase as sc
 
@@ -84,13 +83,7 @@ def main(argv=None) -> int:
     row["track_model_overhead"] = round(row["plain_mjx_step_substeps_per_s"] / row["tracks_substeps_per_s"] - 1, 3)
     rows.append(row)
     print(json.dumps(row), flush=True)
-  result = {"device": str(jax.devices()[0]), "device_kind": jax.devices()[0].device_kind,
-            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-            "command": "python " + " ".join(sys.argv), "jax": jax.__version__,
-            "host": platform.node(), "robot": sim.robot.name, "rows": rows}
-  if args.out:
-    with open(args.out, "w") as f:
-      json.dump(result, f, indent=1)
+  write_result(args.out, rows, robot=sim.robot.name)
   return 0
 
 
