@@ -157,10 +157,7 @@ def main(argv: list[str] | None = None) -> int:
       json.dump(trajectory_record(setup, qpos, summary), f)
   if args.video:
     from mjx_tracks.render import render_frames, write_video  # noqa: PLC0415
-    mj = setup.sim.mj_model
-    ids = setup.sim.layout.scene_boxes
-    pos, size = (np.asarray(a) for a in sc.step_boxes(setup.stairs))
-    mj.geom_pos[ids], mj.geom_size[ids] = pos, size
+    mj = setup.sim.c_model_with_boxes(*sc.step_boxes(setup.stairs))
     write_video(args.video, render_frames(mj, qpos), fps=1.0 / args.control_period)
   target = "top" if args.direction == "up" else "bottom"
   print(f"{robot.name} {args.direction} h={float(setup.stairs.riser):.2f} l={float(setup.stairs.tread):.2f} "

@@ -51,16 +51,14 @@ def resolve_layout(m: mujoco.MjModel, robot: RobotSpec) -> Layout:
   names = robot.joint_names()
   jids = [gid(mujoco.mjtObj.mjOBJ_JOINT, n) for n in names]
   geom_belt = np.full(m.ngeom, -1, np.int32)
+  steps = []
   for g in range(m.ngeom):
     name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
     if name.startswith("belt_"):
       belt = name[len("belt_"):]
       belt = belt.rsplit("_", 1)[0] if belt.startswith("flipper_") else belt
       geom_belt[g] = BELTS.index(belt)
-  steps = []
-  for g in range(m.ngeom):
-    name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
-    if name.startswith(SCENE_BOX) and name[len(SCENE_BOX):].isdigit():
+    elif name.startswith(SCENE_BOX) and name[len(SCENE_BOX):].isdigit():
       steps.append((int(name[len(SCENE_BOX):]), g))
   return Layout(
       chassis_body=gid(mujoco.mjtObj.mjOBJ_BODY, CHASSIS_BODY),

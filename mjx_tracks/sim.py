@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 
 import jax
@@ -66,6 +67,13 @@ class Simulator:
         geom_size=m.geom_size.at[ids].set(box_size),
         geom_rbound=m.geom_rbound.at[ids].set(jnp.linalg.norm(box_size, axis=-1)),
     )
+
+  def c_model_with_boxes(self, box_pos, box_size) -> mujoco.MjModel:
+    """A copy of the MuJoCo C model with one environment's scene boxes (for rendering, oracles)."""
+    mj = copy.copy(self.mj_model)
+    ids = self.layout.scene_boxes
+    mj.geom_pos[ids], mj.geom_size[ids] = np.asarray(box_pos), np.asarray(box_size)
+    return mj
 
   def init_data(self, pos: jax.Array, yaw: jax.Array, joint_angles: jax.Array | None = None) -> mjx.Data:
     """Data with the chassis resting at ground point pos (m) with heading yaw (rad)."""

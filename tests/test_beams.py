@@ -36,15 +36,13 @@ def test_beam_rays_match_mj_ray_for_random_poses(jaguar_stairs):
     d = mjx.kinematics(m, d.replace(qpos=d.qpos.at[:7].set(root)))
     return s, cast(LAYOUT, m, d, sim.layout.camera_site)
 
-  mj = sim.mj_model
-  data = mujoco.MjData(mj)
   geomgroup = np.array([1, 0, 0, 0, 0, 0], np.uint8)
   hits = 0
   for trial in range(6):
     root = _random_pose(rng)
     s, depth = mjx_depth(jax.random.PRNGKey(trial), jnp.asarray(root, jnp.float32))
-    ids = sim.layout.scene_boxes
-    mj.geom_pos[ids], mj.geom_size[ids] = np.asarray(s.box_pos), np.asarray(s.box_size)
+    mj = sim.c_model_with_boxes(s.box_pos, s.box_size)
+    data = mujoco.MjData(mj)
     data.qpos[:] = 0
     data.qpos[:7] = root
     mujoco.mj_forward(mj, data)

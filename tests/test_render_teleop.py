@@ -11,9 +11,11 @@ from mjx_tracks.teleop import apply_key
 
 def test_depth_image_centre_matches_a_ray_along_the_camera_axis(jaguar_stairs):
   sim = jaguar_stairs
-  mj = sim.mj_model
-  ids = sim.layout.scene_boxes
-  mj.geom_pos[ids[0]], mj.geom_size[ids[0]] = (1.5, 0, 0.5), (0.5, 1.0, 0.5)  # a block ahead
+  n = len(sim.layout.scene_boxes)
+  pos, size = np.tile([-50.0, 0, -10], (n, 1)), np.full((n, 3), 0.1)
+  pos[0], size[0] = (1.5, 0, 0.5), (0.5, 1.0, 0.5)  # a block ahead, the rest parked
+  mj = sim.c_model_with_boxes(pos, size)
+  assert mj is not sim.mj_model and sim.mj_model.geom_pos[sim.layout.scene_boxes[0], 2] < -5
   qpos = mj.qpos0.copy()
   qpos[2] = sim.robot.spawn_height
   depth = render_depth(mj, qpos)

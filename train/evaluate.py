@@ -38,7 +38,8 @@ def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
 
 
 def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record: bool = False):
-  """Per-trial figures (dict of arrays) and, if record, qpos of trial 0 at every step."""
+  """Per-trial figures (dict of arrays) and, if record, qpos of trial 0 at every step and a C
+  model of its scene."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
@@ -69,17 +70,15 @@ def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record:
     return acc, jnp.concatenate([s.pipeline_state.data.qpos[:1], qpos]), scene0
 
   acc, qpos, scene0 = jax.jit(rollout)(jax.random.split(jax.random.PRNGKey(seed), trials))
-  if record:  # put trial 0's scene into the C model used for rendering
-    ids = core.sim.layout.scene_boxes
-    core.sim.mj_model.geom_pos[ids] = np.asarray(scene0.box_pos)
-    core.sim.mj_model.geom_size[ids] = np.asarray(scene0.box_size)
   acc = {k: np.asarray(v) for k, v in acc.items()}
   per_trial = {
       "progress": acc["progress"], "success": acc["success"],
       "cog_deviation": np.where(acc["on"] > 0, acc["cog"] / np.maximum(acc["on"], 1), 0.0),
       "pitch_rate": acc["pitch"] / np.maximum(acc["length"], 1), "tipped_over": acc["tipped"],
       "length": acc["length"]}
-  return per_trial, (np.asarray(qpos) if record else None), core
+  # trial 0's scene in a C model, for rendering its recorded qpos
+  render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
+  return per_trial, (np.asarray(qpos) if record else None), render_model
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -113,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
-  per_trial, qpos, core = run_trials(cfg, act, args.trials, args.eps, args.seed, bool(args.video))
+  per_trial, qpos, render_model = run_trials(cfg, act, args.trials, args.eps, args.seed, bool(args.video))
   stats = {k: {"mean": float(v.mean()), "std": float(v.std())} for k, v in per_trial.items()}
   report = {
       "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": args.scene,
@@ -138,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"note: run {meta['run_id']} is not in {db.path}; trials not recorded there", file=sys.stderr)
   if args.video:
     from mjx_tracks.render import render_frames, write_video  # noqa: PLC0415
-    write_video(args.video, render_frames(core.sim.mj_model, qpos), fps=1 / cfg.control.period)
+    write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)
   m = stats
   print(f"{meta['task']} {args.scene}: {args.trials} trials, progress {m['progress']['mean']:.3f} +- "
         f"{m['progress']['std']:.3f}, success {m['success']['mean']:.2f}, COG deviation "
