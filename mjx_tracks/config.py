@@ -79,7 +79,7 @@ class SceneConfig:
   kind: str = "stairs"  # stairs | nav
   direction: str = "up"  # stairs: up | down
   sampler: str = "incremental"  # uniform | incremental
-  variant: str = "paper"  # incremental: paper | original
+  variant: str = "difficulty"  # incremental: difficulty | paper_literal | original_code
   tread: tuple[float, float] = (0.35, 0.52)  # m, l
   riser: tuple[float, float] = (0.12, 0.22)  # m, h
   steps: tuple[int, int] = (1, 7)  # n
@@ -92,7 +92,8 @@ class SceneConfig:
     _check(self.kind in ("stairs", "nav"), f"{key}.kind", "must be 'stairs' or 'nav'")
     _check(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
     _check(self.sampler in ("uniform", "incremental"), f"{key}.sampler", "must be 'uniform' or 'incremental'")
-    _check(self.variant in ("paper", "original"), f"{key}.variant", "must be 'paper' or 'original'")
+    from scenes.samplers import VARIANTS  # noqa: PLC0415
+    _check(self.variant in VARIANTS, f"{key}.variant", f"must be one of {VARIANTS}, got {self.variant!r}")
     _check(0.1 <= self.tread[0] <= self.tread[1] <= 1.0, f"{key}.tread", "needs 0.1 <= min <= max <= 1.0 m")
     _check(0.01 <= self.riser[0] <= self.riser[1] <= 0.4, f"{key}.riser", "needs 0.01 <= min <= max <= 0.4 m")
     _check(1 <= self.steps[0] <= self.steps[1] <= 7, f"{key}.steps", "needs 1 <= min <= max <= 7")

@@ -26,8 +26,7 @@ from mjx_tracks.sim import Simulator
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
 from scenes.scene import SceneState
-from scenes.staircase import StairScene, Staircase
-from scenes.samplers import Ranges
+from scenes.staircase import StairScene, Staircase, stair_ranges
 
 METRICS = tuple(f"reward/{t}" for t in REWARD_TERMS) + (
     "progress", "cog_deviation", "on_stairs", "pitch_rate", "tipped_over", "goal_reached",
@@ -52,9 +51,7 @@ class EnvState:
 def _make_scene(cfg: TaskConfig):
   s = cfg.scene
   if s.kind == "stairs":
-    ranges = Ranges(names=("tread", "riser", "steps"), low=(s.tread[0], s.riser[0], float(s.steps[0])),
-                    high=(s.tread[1], s.riser[1], float(s.steps[1])), integer=(False, False, True),
-                    shrinking=(True, False, False))
+    ranges = stair_ranges(s.tread, s.riser, s.steps)
     return StairScene(s.direction, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
   return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal)
 
@@ -118,7 +115,7 @@ class TrackedRobotEnv(Env):
 
     pos = data.xpos[self.sim.layout.chassis_body]
     rpy = chassis_rpy(data.qpos)
-    dist = goal_distance(pos, es.scene.goal, self.cfg.episode.goal_tolerance)
+    dist = goal_distance(pos, es.scene.goal, es.scene.goal_halfwidth, self.cfg.episode.goal_tolerance)
     cog, on_stairs = self._cog(data, es.scene)
     pitch_rate = jnp.abs(data.qvel[4])
     sample = self.monitor.safety_sample(cog, pitch_rate)
@@ -145,7 +142,8 @@ class TrackedRobotEnv(Env):
     m = self.sim.with_boxes(scene.box_pos, scene.box_size)
     nj = self.sim.layout.n_joints
     data = self._sense(m, self.sim.init_data(scene.spawn_pos, scene.spawn_yaw, jnp.zeros(nj)))
-    d0 = goal_distance(data.xpos[self.sim.layout.chassis_body], scene.goal, self.cfg.episode.goal_tolerance)
+    d0 = goal_distance(data.xpos[self.sim.layout.chassis_body], scene.goal, scene.goal_halfwidth,
+                       self.cfg.episode.goal_tolerance)
     es = EnvState(data=data, scene=scene, targets=jnp.zeros(nj), d0=d0, closest=d0,
                   window=jnp.zeros(self.cfg.reward.safety_window), penalty_sum=jnp.float32(0.0),
                   penalty_k=jnp.asarray(penalty_k, jnp.float32), key=k_next)

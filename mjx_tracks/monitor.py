@@ -29,9 +29,16 @@ COG_MAX = 0.32  # m
 REWARD_TERMS = ("progress", "safety", "tipover")
 
 
-def goal_distance(pos: jax.Array, goal: jax.Array, tolerance: float) -> jax.Array:
-  """|p - goal| - tolerance (m)."""
-  return jnp.linalg.norm(pos - goal) - tolerance
+def goal_distance(pos: jax.Array, goal: jax.Array, halfwidth: jax.Array, tolerance: float) -> jax.Array:
+  """Distance (m) from p to the goal segment goal +- halfwidth along y, minus tolerance."""
+  d = pos - goal
+  d = d.at[..., 1].set(jnp.maximum(jnp.abs(d[..., 1]) - halfwidth, 0.0))
+  return jnp.linalg.norm(d, axis=-1) - tolerance
+
+
+def goal_reached(dist: jax.Array) -> jax.Array:
+  """Success: the robot is within the tolerance of the goal (dist from goal_distance < 0)."""
+  return dist < 0.0
 
 
 def progress_step(dist: jax.Array, closest: jax.Array, d0: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -102,7 +109,7 @@ class Monitor:
     """Reward terms, new closest, terminated flag, flags dict for one step."""
     progress, closest = progress_step(dist, closest, d0)
     tipped = tipped_over(rpy)
-    reached = dist < 0.0
+    reached = goal_reached(dist)
     away = dist > self.episode.away_factor * d0
     terms = {
         "progress": self.reward.progress_scale * progress,

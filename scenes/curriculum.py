@@ -4,7 +4,9 @@ A small pytree updated after each batched step, outside the per-environment vmap
 done mask. Rules:
   "return"   (paper)          eps = clip(mean return of the last N_e finished episodes, 0, 1)
   "progress" (original code)  eps = clip(mean progress of the last N_e finished episodes, 0, 1)
-Episodes that did not finish are never counted. Under pmap / shard_map, pass axis_name: the done
+Until N_e episodes have finished, the missing ones count as 0, so eps rises as the window fills
+(one lucky first episode moves eps by 1 / N_e, not to 1). Episodes that did not finish are never
+counted. Under pmap / shard_map, pass axis_name: the done
 masks and values of every device are gathered first, so all devices hold the same state.
 """
 
@@ -69,6 +71,6 @@ class Curriculum:
     head = (s.head + n_done) % self.window
     valid = jnp.arange(self.window) < jnp.minimum(finished, self.window)
     values = ring_r if self.rule == "return" else ring_p
-    mean = jnp.sum(jnp.where(valid, values, 0.0)) / jnp.maximum(valid.sum(), 1)
+    mean = jnp.sum(jnp.where(valid, values, 0.0)) / self.window  # missing episodes count as 0
     eps = jnp.where(finished > 0, jnp.clip(mean, 0.0, 1.0), s.eps)
     return CurriculumState(eps.astype(jnp.float32), ring_r, ring_p, head, finished, s.updates + 1)

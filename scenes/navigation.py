@@ -34,7 +34,8 @@ GAP = (1.0, 2.0)  # m, C range
 WALL_THICKNESS = 0.3  # m, zigzag walls
 OBSTACLE_HEIGHT = 1.0  # m
 UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
-              integer=(False,) * 5, shrinking=(False,) * 5)
+              integer=(False,) * 5, hard=("high", "high", "high", "high", "low"))
+# hardest: obstacles jutting furthest and longest, the narrowest gap C
 
 
 def _lerp(a, b, u):
@@ -46,7 +47,7 @@ class NavScene:
   """Hallway / zigzag navigation area."""
 
   sampler: str = "uniform"
-  variant: str = "paper"
+  variant: str = "difficulty"
   kinds: tuple[str, ...] = ("hallway", "zigzag")  # drawn with equal probability
   random_spawn: bool = False
   random_goal: bool = False
@@ -104,4 +105,4 @@ class NavScene:
     g = jax.random.uniform(k_g, (2,))
     goal = (jnp.array([_lerp(10.5, 11.5, g[0]), _lerp(-4.0, 4.0, g[1]), 0.085]) if self.random_goal
             else jnp.array([11.0, 0.0, 0.085]))
-    return SceneState(pos, size, spawn, yaw, goal, xi, variant.astype(jnp.int32))
+    return SceneState(pos, size, spawn, yaw, goal, jnp.float32(0.0), xi, variant.astype(jnp.int32))

@@ -12,6 +12,7 @@ class SceneState:
   box_size: jax.Array  # (n_boxes, 3) m, half-sizes
   spawn_pos: jax.Array  # (3,) m, ground point under the robot's centre
   spawn_yaw: jax.Array  # () rad
-  goal: jax.Array  # (3,) m
+  goal: jax.Array  # (3,) m, centre of the goal segment
+  goal_halfwidth: jax.Array  # () m: the goal is the segment goal +- goal_halfwidth along y (0: a point)
   xi: jax.Array  # (k,) sampled scene parameters (names in the scene's Ranges)
   variant: jax.Array  # () int32: 0 stairs / hallway, 1 zigzag

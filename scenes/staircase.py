@@ -105,9 +105,19 @@ def descent_spawn(stairs: Staircase) -> tuple[jax.Array, jax.Array]:
   return pos, z + jnp.pi
 
 
-STAIR_RANGES = Ranges(names=("tread", "riser", "steps"), low=(0.35, 0.12, 1.0),
-                      high=(0.52, 0.22, 7.0), integer=(False, False, True),
-                      shrinking=(True, False, False))
+STAIR_PARAMS = ("tread", "riser", "steps")  # xi = (l m, h m, n)
+STAIR_HARD = ("low", "high", "high")  # hardest: short treads, tall risers, many steps
+STAIR_LIMITS = ((0.1, 1.0), (0.01, 0.4), (1, N_MAX))  # what the generator supports (m, m, count)
+
+
+def stair_ranges(tread: tuple[float, float], riser: tuple[float, float],
+                 steps: tuple[int, int]) -> Ranges:
+  """The sampler ranges of xi = (tread, riser, steps) with their hard ends."""
+  return Ranges(names=STAIR_PARAMS, low=(tread[0], riser[0], float(steps[0])),
+                high=(tread[1], riser[1], float(steps[1])), integer=(False, False, True),
+                hard=STAIR_HARD)
+
+
 SPAWN_Y = 0.75  # m, random spawn / goal lateral offset ~ U(-0.75, 0.75)
 SPAWN_YAW = jnp.pi / 2  # rad, random spawn yaw offset ~ U(-pi/2, pi/2)
 
@@ -118,16 +128,16 @@ class StairScene:
 
   direction: str = "up"  # "up" | "down"
   sampler: str = "incremental"  # "uniform" | "incremental"
-  variant: str = "paper"  # incremental variant: "paper" | "original"
-  ranges: Ranges = STAIR_RANGES
+  variant: str = "difficulty"  # incremental variant (scenes.samplers.VARIANTS)
+  ranges: Ranges = stair_ranges((0.35, 0.52), (0.12, 0.22), (1, 7))
   random_spawn: bool = False
   random_goal: bool = False
 
   def __post_init__(self):
     if self.direction not in ("up", "down"):
       raise ValueError(f"stairs direction must be 'up' or 'down', got {self.direction!r}")
-    if self.ranges.names != STAIR_RANGES.names:
-      raise ValueError(f"stair ranges must be named {STAIR_RANGES.names}")
+    if self.ranges.names != STAIR_PARAMS:
+      raise ValueError(f"stair ranges must be named {STAIR_PARAMS}")
     lo, hi = self.ranges.low, self.ranges.high
     if not (lo[0] > 0 and lo[1] > 0 and 1 <= lo[2] and hi[2] <= N_MAX):
       raise ValueError(f"stair ranges need tread, riser > 0 and 1 <= steps <= {N_MAX}")
@@ -156,4 +166,7 @@ class StairScene:
       ahead = 1.0 if up else -1.0
       goal = goal.at[1].set(jax.random.uniform(k_gy, minval=-SPAWN_Y, maxval=SPAWN_Y))
       goal = goal.at[0].add(ahead * jax.random.uniform(k_gx, minval=-0.5, maxval=0.5))
-    return SceneState(pos, size, spawn, yaw, goal, xi, jnp.int32(0))
+    # the goal is a line across the staircase (the stair modes cannot steer nor observe lateral
+    # drift); a random goal is a point with a random lateral offset, for modes that steer
+    halfwidth = jnp.float32(0.0 if self.random_goal else WIDTH / 2)
+    return SceneState(pos, size, spawn, yaw, goal, halfwidth, xi, jnp.int32(0))

@@ -51,7 +51,7 @@ def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record:
     s = jax.vmap(core.reset_at, in_axes=(0, None, None))(keys, jnp.float32(eps), jnp.float32(1.0))
     zeros = jnp.zeros(trials)
     acc0 = {"progress": zeros, "success": zeros, "cog": zeros, "on": zeros, "pitch": zeros,
-            "tipped": zeros, "length": zeros}
+            "tipped": zeros, "length": zeros, "final_pos": s.pipeline_state.data.qpos[:, :3]}
 
     def body(carry, _):
       s, acc, active = carry
@@ -62,7 +62,8 @@ def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record:
              "success": jnp.maximum(acc["success"], a * m["goal_reached"]),
              "cog": acc["cog"] + a * m["cog_deviation"], "on": acc["on"] + a * m["on_stairs"],
              "pitch": acc["pitch"] + a * m["pitch_rate"],
-             "tipped": jnp.maximum(acc["tipped"], a * m["tipped_over"]), "length": acc["length"] + a}
+             "tipped": jnp.maximum(acc["tipped"], a * m["tipped_over"]), "length": acc["length"] + a,
+             "final_pos": jnp.where(active[:, None], s.pipeline_state.data.qpos[:, :3], acc["final_pos"])}
       return (s, acc, active & (s.done == 0)), s.pipeline_state.data.qpos[0]
 
     (_, acc, _), qpos = jax.lax.scan(body, (s, acc0, jnp.ones(trials, bool)), None, length=steps)
@@ -75,7 +76,8 @@ def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record:
       "progress": acc["progress"], "success": acc["success"],
       "cog_deviation": np.where(acc["on"] > 0, acc["cog"] / np.maximum(acc["on"], 1), 0.0),
       "pitch_rate": acc["pitch"] / np.maximum(acc["length"], 1), "tipped_over": acc["tipped"],
-      "length": acc["length"]}
+      "length": acc["length"], "final_x": acc["final_pos"][:, 0], "final_y": acc["final_pos"][:, 1],
+      "final_z": acc["final_pos"][:, 2]}
   # trial 0's scene in a C model, for rendering its recorded qpos
   render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
   return per_trial, (np.asarray(qpos) if record else None), render_model
