@@ -16,19 +16,19 @@ if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY") and ctypes.ut
 
 def load(task: str, overrides=()):
   """The Brax environment of a task (configs/<task>.yaml plus dotted KEY=VALUE overrides)."""
-  from mjx_tracks.tasks import load as _load  # noqa: PLC0415
+  from mjx_tracks.envs.registry import load as _load  # noqa: PLC0415
   return _load(task, overrides)
 
 
 def _register_gymnasium() -> None:
   import gymnasium  # noqa: PLC0415
 
-  from mjx_tracks.config import available_tasks  # noqa: PLC0415
+  from mjx_tracks.envs.config import available_tasks  # noqa: PLC0415
   for task in available_tasks():
     env_id = f"mjx_tracks/{task}-v0"
     if env_id not in gymnasium.registry:
-      gymnasium.register(id=env_id, entry_point="mjx_tracks.gym_env:TrackedRobotGymEnv",
-                         vector_entry_point="mjx_tracks.gym_env:TrackedRobotVectorEnv",
+      gymnasium.register(id=env_id, entry_point="mjx_tracks.envs.gym_env:TrackedRobotGymEnv",
+                         vector_entry_point="mjx_tracks.envs.gym_env:TrackedRobotVectorEnv",
                          kwargs={"task": task})
 
 

@@ -21,11 +21,10 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 
-from mjx_tracks.layout import SCENE_BOX
-from mjx_tracks.robots.mjcf import WORLD_CONAFFINITY, WORLD_CONTYPE
 from scenes import samplers
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
+from scenes.world import SCENE_BOX, world_geom_attrs
 
 AREA_W = 10.0  # m, W
 OBSTACLE_L = 8.0  # m, L
@@ -56,11 +55,10 @@ class NavScene:
     if not self.kinds or any(k not in ("hallway", "zigzag") for k in self.kinds):
       raise ValueError(f"nav kinds must be a non-empty subset of ('hallway', 'zigzag'), got {self.kinds}")
 
-  n_boxes = 2
   direction = "flat"
 
   def world_xml(self) -> str:
-    w = f'contype="{WORLD_CONTYPE}" conaffinity="{WORLD_CONAFFINITY}" condim="3" material="world"'
+    w = world_geom_attrs()
     h = AREA_W / 2
     boxes = "\n".join(f'<geom name="{SCENE_BOX}{k}" type="box" pos="{-20 - 3 * k} 0 -5" size="0.1 0.1 0.1" '
                       f'{w} rgba=".6 .4 .3 1"/>' for k in range(2))

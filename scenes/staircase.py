@@ -16,18 +16,17 @@ import jax.numpy as jnp
 
 from flax import struct
 
-from mjx_tracks.layout import SCENE_BOX
 from scenes import samplers
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
-from mjx_tracks.robots.mjcf import WORLD_CONAFFINITY, WORLD_CONTYPE
+from scenes.world import SCENE_BOX, world_geom_attrs
 
 N_MAX = 7  # steps in the pool (the reference's n_max)
 WIDTH = 2.0  # m, between the side walls
 LANDING_LENGTH = 3.0  # m, top landing
-WALL_HEIGHT = 2.0  # m above the landing (walls are planes: infinitely tall in the physics)
 GOAL_PAST_EDGE = 1.0  # m, ascent goal past the top step edge; descent goal before the first step
 GOAL_ABOVE_TREAD = 0.085  # m
+GOAL_HALFWIDTH = WIDTH / 2  # m: the goal is a line across the staircase (see StairScene.sample)
 SPAWN_BEFORE_STAIRS = 1.0  # m, ascent spawn in front of the first riser
 PARK = (-50.0, 0.0, -10.0)  # m, where unused boxes go
 
@@ -50,7 +49,7 @@ class Staircase:
 
 def world_xml(n_max: int = N_MAX) -> str:
   """Floor, side walls (planes at y = +-WIDTH/2) and the pool of step boxes."""
-  world = f'contype="{WORLD_CONTYPE}" conaffinity="{WORLD_CONAFFINITY}" condim="3" material="world"'
+  world = world_geom_attrs()
   half = WIDTH / 2
   steps = "\n".join(
       f'<geom name="{SCENE_BOX}{k}" type="box" pos="{PARK[0] - k} {PARK[1]} {PARK[2]}" '
@@ -142,8 +141,6 @@ class StairScene:
     if not (lo[0] > 0 and lo[1] > 0 and 1 <= lo[2] and hi[2] <= N_MAX):
       raise ValueError(f"stair ranges need tread, riser > 0 and 1 <= steps <= {N_MAX}")
 
-  n_boxes = N_MAX
-
   def world_xml(self) -> str:
     return world_xml(N_MAX)
 
@@ -168,5 +165,5 @@ class StairScene:
       goal = goal.at[0].add(ahead * jax.random.uniform(k_gx, minval=-0.5, maxval=0.5))
     # the goal is a line across the staircase (the stair modes cannot steer nor observe lateral
     # drift); a random goal is a point with a random lateral offset, for modes that steer
-    halfwidth = jnp.float32(0.0 if self.random_goal else WIDTH / 2)
+    halfwidth = jnp.float32(0.0 if self.random_goal else GOAL_HALFWIDTH)
     return SceneState(pos, size, spawn, yaw, goal, halfwidth, xi, jnp.int32(0))

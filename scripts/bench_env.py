@@ -15,7 +15,7 @@ import jax
 import jax.numpy as jnp
 
 import mjx_tracks
-from mjx_tracks.wrappers import batched_env
+from mjx_tracks.envs.wrappers import batched_env
 from result_file import write_result
 
 

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 
 from mjx_tracks.robots import get_robot
 from result_file import write_result
-from mjx_tracks.sim import staircase_simulator
+from mjx_tracks.sim.simulator import staircase_simulator
 from scenes import staircase as sc
 
 

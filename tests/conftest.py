@@ -19,12 +19,12 @@ jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
 def jaguar_stairs():
   """Robot 1 in the staircase world, compiled once for the whole session."""
   from mjx_tracks.robots import get_robot
-  from mjx_tracks.sim import staircase_simulator
+  from mjx_tracks.sim.simulator import staircase_simulator
   return staircase_simulator(get_robot(1))
 
 
 @pytest.fixture(scope="session")
 def absolem_stairs():
   from mjx_tracks.robots import get_robot
-  from mjx_tracks.sim import staircase_simulator
+  from mjx_tracks.sim.simulator import staircase_simulator
   return staircase_simulator(get_robot(2))

@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjx_tracks.beams import BeamLayout, cast
-from mjx_tracks.sim import Simulator
+from mjx_tracks.envs.beams import BeamLayout, cast
+from mjx_tracks.sim.simulator import Simulator
 from scenes.staircase import StairScene
 
 LAYOUT = BeamLayout.create(1.2, (640, 480), 60, 12, 10, (2, 2), (0.2, 1.5), 8.0)

@@ -2,7 +2,7 @@
 
 import pytest
 
-from mjx_tracks.config import ConfigError, available_tasks, load_config
+from mjx_tracks.envs.config import ConfigError, available_tasks, load_config
 
 PAPER_TASKS = {"asc-inc-cog", "asc-uni-cog", "des-inc-ang", "des-uni-ang"}
 

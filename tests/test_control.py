@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mjx_tracks.control import CONTROL_MODES, INCREMENT, Controller, command_belt_speeds
+from mjx_tracks.sim.control import CONTROL_MODES, INCREMENT, Controller, command_belt_speeds
 from mjx_tracks.robots import get_robot
 
 JAGUAR, ABSOLEM = get_robot(1), get_robot(2)

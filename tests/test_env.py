@@ -11,9 +11,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import mjx_tracks
-from mjx_tracks.config import available_tasks
-from mjx_tracks.env import METRICS
-from mjx_tracks.wrappers import batched_env
+from mjx_tracks.envs.config import available_tasks
+from mjx_tracks.envs.task_env import METRICS
+from mjx_tracks.envs.wrappers import batched_env
 
 N_ENVS = 2
 
@@ -94,6 +94,6 @@ def test_gymnasium_checker_passes_and_vector_env_steps():
 
 
 def test_bad_task_settings_fail_clearly():
-  from mjx_tracks.config import ConfigError
+  from mjx_tracks.envs.config import ConfigError
   with pytest.raises(ConfigError, match="arm"):
     mjx_tracks.load("asc-inc-cog", ["robot=2"])

@@ -4,8 +4,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mjx_tracks.config import EpisodeConfig, RewardConfig
-from mjx_tracks.monitor import (Monitor, cog_deviation, goal_distance, normalizer_init,
+from mjx_tracks.envs.config import EpisodeConfig, RewardConfig
+from mjx_tracks.envs.rewards import (Monitor, cog_deviation, goal_distance, normalizer_init,
                                 normalizer_update, progress_step)
 
 

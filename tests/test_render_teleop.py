@@ -4,9 +4,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjx_tracks.control import INCREMENT
-from mjx_tracks.render import render_depth
-from mjx_tracks.teleop import apply_key
+from mjx_tracks.sim.control import INCREMENT
+from mjx_tracks.tools.render import render_depth
+from mjx_tracks.tools.teleop import apply_key
 
 
 def test_depth_image_centre_matches_a_ray_along_the_camera_axis(jaguar_stairs):

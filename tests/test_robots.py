@@ -4,9 +4,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjx_tracks.physics import PhysicsConfig
+from mjx_tracks.sim.physics import PhysicsConfig
 from mjx_tracks.robots import get_robot
-from mjx_tracks.robots.mjcf import ROBOT_CONTYPE
+from scenes.world import ROBOT_CONTYPE
 
 
 @pytest.mark.parametrize("key,mass,has_arm", [("1", 22.2, True), ("2", 29.0, False)])
@@ -43,7 +43,7 @@ def test_sensor_sites_where_the_reference_puts_them(jaguar_stairs):
 
 
 def test_bad_physics_config_fails_clearly():
-  from mjx_tracks.physics import compile_model
+  from mjx_tracks.sim.physics import compile_model
   with pytest.raises(ValueError, match="timestep"):
     compile_model(get_robot(1), "", PhysicsConfig(timestep=0.5))
   with pytest.raises(KeyError, match="unknown robot"):

@@ -6,9 +6,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mjx_tracks.control import Controller
-from mjx_tracks.drive import DriveSetup, scripted_rollout, summarize
-from mjx_tracks.pose import chassis_rpy
+from mjx_tracks.sim.control import Controller
+from mjx_tracks.tools.drive import DriveSetup, scripted_rollout, summarize
+from mjx_tracks.sim.pose import chassis_rpy
 from scenes import staircase as sc
 
 SEVEN_STEPS = sc.Staircase(jnp.float32(0.30), jnp.float32(0.17), jnp.int32(7))

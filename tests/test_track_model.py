@@ -7,11 +7,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mjx_tracks.control import command_belt_speeds
-from mjx_tracks.pose import chassis_rpy
+from mjx_tracks.sim.control import command_belt_speeds
+from mjx_tracks.sim.pose import chassis_rpy
 from mjx_tracks.robots import get_robot
-from mjx_tracks.sim import Simulator
-from mjx_tracks.robots.mjcf import WORLD_CONAFFINITY, WORLD_CONTYPE
+from mjx_tracks.sim.simulator import Simulator
+from scenes.world import world_geom_attrs
 from scenes import staircase as sc
 
 SUBSTEPS = 25  # 0.25 s per call at dt = 0.01 s
@@ -61,7 +61,7 @@ def test_turn_in_place_yaw_rate_matches_steering_formula(flat):
 
 def test_belt_bottom_moves_backward_and_front_end_down(flat):
   """Belt surface velocity u (y x r): backward under the track, downward on its front roller."""
-  from mjx_tracks.tracks import contact_belt_velocity
+  from mjx_tracks.sim.tracks import contact_belt_velocity
   sim, m, adv = flat
   d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(sim.layout.n_joints))
   d = adv(d, jnp.zeros(6))
@@ -79,7 +79,7 @@ def test_belt_bottom_moves_backward_and_front_end_down(flat):
 def _incline_world(angle: float) -> str:
   n = (-math.sin(angle), 0.0, math.cos(angle))
   return (f'<geom name="slope" type="plane" size="0 0 1" zaxis="{n[0]} {n[1]} {n[2]}" '
-          f'contype="{WORLD_CONTYPE}" conaffinity="{WORLD_CONAFFINITY}" condim="3" material="world"/>')
+          f'{world_geom_attrs()}/>')
 
 
 def test_zero_command_holds_on_20_degree_incline():

@@ -1,7 +1,7 @@
 """`python -m train.evaluate RUN_DIR --trials 100 --scene hardest`: run a trained policy.
 
-Scenes: hardest (n = n_max, l = l_min, h = h_max of the task's ranges: the paper's highest
-complexity, 7 x 0.35 x 0.22 m by default), uniform (the task's ranges, uniform), incremental
+Scenes: hardest (every staircase parameter at its hard end of the task's ranges: n = n_max,
+l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by default), uniform (the task's ranges, uniform), incremental
 (the task's sampler at --eps), train (the task's own sampler at --eps). Trials run in parallel,
 one episode each, deterministic policy. Writes RUN_DIR/eval-<scene>.json (mean +- std of
 progress, success, COG deviation, |pitch rate|, tip-overs, episode length) and database rows.
@@ -18,7 +18,8 @@ import sys
 
 import numpy as np
 
-from mjx_tracks.config import ConfigError, TaskConfig, from_dict
+from mjx_tracks.envs.config import ConfigError, TaskConfig, from_dict
+from scenes.staircase import stair_ranges
 
 SCENES = ("hardest", "uniform", "incremental", "train")
 
@@ -28,8 +29,10 @@ def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
   if scene == "hardest":
     if s.kind != "stairs":
       raise ConfigError("scene 'hardest' exists for stair tasks only")
-    s = dataclasses.replace(s, sampler="uniform", tread=(s.tread[0], s.tread[0]),
-                            riser=(s.riser[1], s.riser[1]), steps=(s.steps[1], s.steps[1]))
+    hard = stair_ranges(s.tread, s.riser, s.steps).hardest  # each parameter at its hard end
+    pin = lambda v, integer=False: (int(round(v)),) * 2 if integer else (float(v),) * 2
+    s = dataclasses.replace(s, sampler="uniform", tread=pin(hard[0]), riser=pin(hard[1]),
+                            steps=pin(hard[2], True))
   elif scene == "uniform":
     s = dataclasses.replace(s, sampler="uniform")
   elif scene == "incremental":
@@ -38,46 +41,37 @@ def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
 
 
 def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record: bool = False):
-  """Per-trial figures (dict of arrays) and, if record, qpos of trial 0 at every step and a C
-  model of its scene."""
+  """Per-trial figures (dict of arrays, mjx_tracks.envs.episode_stats) with each trial's final
+  chassis position, and, if record, qpos of trial 0 at every step and a C model of its scene."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
-  from mjx_tracks.env import TrackedRobotEnv  # noqa: PLC0415
+  from mjx_tracks.envs.episode_stats import episode_figures  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import METRICS, TrackedRobotEnv  # noqa: PLC0415
   core = TrackedRobotEnv(cfg)
-  steps = cfg.episode.max_steps
 
   def rollout(keys):
     s = jax.vmap(core.reset_at, in_axes=(0, None, None))(keys, jnp.float32(eps), jnp.float32(1.0))
-    zeros = jnp.zeros(trials)
-    acc0 = {"progress": zeros, "success": zeros, "cog": zeros, "on": zeros, "pitch": zeros,
-            "tipped": zeros, "length": zeros, "final_pos": s.pipeline_state.data.qpos[:, :3]}
+    acc0 = {**{k: jnp.zeros(trials) for k in METRICS}, "length": jnp.zeros(trials),
+            "final_pos": s.pipeline_state.data.qpos[:, :3]}
 
     def body(carry, _):
       s, acc, active = carry
       s = jax.vmap(core.step)(s, act(s.obs))
-      m = s.metrics
       a = active.astype(jnp.float32)
-      acc = {"progress": acc["progress"] + a * m["progress"],
-             "success": jnp.maximum(acc["success"], a * m["goal_reached"]),
-             "cog": acc["cog"] + a * m["cog_deviation"], "on": acc["on"] + a * m["on_stairs"],
-             "pitch": acc["pitch"] + a * m["pitch_rate"],
-             "tipped": jnp.maximum(acc["tipped"], a * m["tipped_over"]), "length": acc["length"] + a,
+      acc = {**{k: acc[k] + a * s.metrics[k] for k in METRICS}, "length": acc["length"] + a,
              "final_pos": jnp.where(active[:, None], s.pipeline_state.data.qpos[:, :3], acc["final_pos"])}
       return (s, acc, active & (s.done == 0)), s.pipeline_state.data.qpos[0]
 
-    (_, acc, _), qpos = jax.lax.scan(body, (s, acc0, jnp.ones(trials, bool)), None, length=steps)
+    (_, acc, _), qpos = jax.lax.scan(body, (s, acc0, jnp.ones(trials, bool)), None, length=cfg.episode.max_steps)
     scene0 = jax.tree_util.tree_map(lambda x: x[0], s.pipeline_state.scene)
     return acc, jnp.concatenate([s.pipeline_state.data.qpos[:1], qpos]), scene0
 
   acc, qpos, scene0 = jax.jit(rollout)(jax.random.split(jax.random.PRNGKey(seed), trials))
   acc = {k: np.asarray(v) for k, v in acc.items()}
-  per_trial = {
-      "progress": acc["progress"], "success": acc["success"],
-      "cog_deviation": np.where(acc["on"] > 0, acc["cog"] / np.maximum(acc["on"], 1), 0.0),
-      "pitch_rate": acc["pitch"] / np.maximum(acc["length"], 1), "tipped_over": acc["tipped"],
-      "length": acc["length"], "final_x": acc["final_pos"][:, 0], "final_y": acc["final_pos"][:, 1],
-      "final_z": acc["final_pos"][:, 2]}
+  final = acc["final_pos"]
+  per_trial = {**episode_figures(acc, acc["length"]),
+               "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
   # trial 0's scene in a C model, for rendering its recorded qpos
   render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
   return per_trial, (np.asarray(qpos) if record else None), render_model
@@ -138,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
   except KeyError:
     print(f"note: run {meta['run_id']} is not in {db.path}; trials not recorded there", file=sys.stderr)
   if args.video:
-    from mjx_tracks.render import render_frames, write_video  # noqa: PLC0415
+    from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
     write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)
   m = stats
   print(f"{meta['task']} {args.scene}: {args.trials} trials, progress {m['progress']['mean']:.3f} +- "

@@ -8,24 +8,28 @@ from typing import Any
 
 import numpy as np
 
+from mjx_tracks.envs.episode_stats import episode_figures
+from mjx_tracks.envs.task_env import METRICS
+
 
 def summarize(metrics: dict[str, Any]) -> dict[str, float]:
-  """Episode figures from brax's training ('episode/...') or evaluation ('eval/episode_...') metrics."""
+  """Episode figures (mjx_tracks.envs.episode_stats) from Brax's training ('episode/...') or
+  evaluation ('eval/episode_...') metrics: batch means of the episode sums, so the COG deviation
+  and pitch rate are ratios of means."""
   m = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
   if "episode/sum_reward" in m:
-    get = lambda k: m.get(f"episode/{k}")
-    ret, length = get("sum_reward"), get("length")
+    prefix, ret, length = "episode/", m["episode/sum_reward"], m.get("episode/length")
   elif "eval/episode_reward" in m:
-    get = lambda k: m.get(f"eval/episode_{k}")
-    ret, length = m["eval/episode_reward"], m.get("eval/avg_episode_length")
+    prefix, ret, length = "eval/episode_", m["eval/episode_reward"], m.get("eval/avg_episode_length")
   else:
     return {}
-  on = get("on_stairs") or 0.0
-  out = {"return_mean": ret, "progress_mean": get("progress"), "tipped_rate": get("tipped_over"),
-         "success_rate": get("goal_reached"),
-         "cog_deviation_mean": (get("cog_deviation") or 0.0) / on if on > 0 else 0.0,
-         "pitch_rate_mean": (get("pitch_rate") or 0.0) / length if length else None}
-  return {k: v for k, v in out.items() if v is not None}
+  if any(f"{prefix}{k}" not in m for k in METRICS):
+    return {"return_mean": ret}
+  fig = episode_figures({k: m[f"{prefix}{k}"] for k in METRICS}, length if length else 1.0)
+  out = {"return_mean": ret, "progress_mean": fig["progress"], "tipped_rate": m[f"{prefix}tipped_over"],
+         "success_rate": m[f"{prefix}goal_reached"], "cog_deviation_mean": fig["cog_deviation"],
+         "pitch_rate_mean": fig["pitch_rate"] if length else None}
+  return {k: float(v) for k, v in out.items() if v is not None}
 
 
 class Reporter:

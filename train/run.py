@@ -20,7 +20,7 @@ import signal
 import sys
 from typing import Any
 
-from mjx_tracks.config import ConfigError, TaskConfig, from_dict, load_config
+from mjx_tracks.envs.config import ConfigError, TaskConfig, from_dict, load_config
 from train.db import ExperimentDB, default_path
 from train.presets import PPOPreset, get_preset
 
@@ -72,7 +72,8 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     preset = dataclasses.replace(preset, num_envs=meta["num_envs"])
     return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"],
                    meta["preset"], preset, meta["seed"], tuple(meta["overrides"]),
-                   from_dict(meta["config"]), args.steps or meta["total_steps"], meta["num_envs"],
+                   from_dict(meta["config"]), meta["total_steps"] if args.steps is None else args.steps,
+                   meta["num_envs"],
                    True, meta.get("early_stop_return"))
   if not args.task:
     raise RunError("--task is required (or --resume DIR)")
@@ -83,13 +84,13 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     raise RunError(str(e))
   overrides = tuple(preset.config_overrides) + tuple(args.set)
   cfg = load_config(args.task, overrides)
-  num_envs = args.num_envs or preset.num_envs
+  num_envs = preset.num_envs if args.num_envs is None else args.num_envs
   if num_envs < 1:
     raise RunError("--num-envs must be >= 1")
   if isinstance(preset, PPOPreset) and (preset.batch_size * preset.num_minibatches) % num_envs:
     raise RunError(f"--num-envs {num_envs} must divide batch_size x num_minibatches = "
                    f"{preset.batch_size * preset.num_minibatches} of the {preset_name} PPO preset")
-  steps = args.steps or preset.num_timesteps
+  steps = preset.num_timesteps if args.steps is None else args.steps
   if steps < 1:
     raise RunError("--steps must be >= 1")
   stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -126,8 +127,8 @@ def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
   """Runs the trainer; returns the final summary (step, last statistics, export path)."""
   import jax  # noqa: PLC0415
 
-  from mjx_tracks.env import TrackedRobotEnv  # noqa: PLC0415
-  from mjx_tracks.wrappers import global_stats_from_json, global_stats_to_json, wrap_for_training  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
+  from mjx_tracks.envs.wrappers import global_stats_from_json, global_stats_to_json, wrap_for_training  # noqa: PLC0415
   from train import compat  # noqa: PLC0415
   from train.checkpoints import RunCheckpoints, export_policy, restore_ppo_params  # noqa: PLC0415
   from train.networks import NetworkSpec  # noqa: PLC0415

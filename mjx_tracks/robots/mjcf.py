@@ -6,10 +6,8 @@ import math
 
 from mjx_tracks.robots.spec import CapsuleSegment, RobotSpec
 
-# Collision filtering: robot geoms collide with world geoms only, never with each other.
-ROBOT_CONTYPE, ROBOT_CONAFFINITY = 2, 1
-WORLD_CONTYPE, WORLD_CONAFFINITY = 1, 2
-ROBOT_GROUP = 1  # geom group of robot geoms (depth beams ignore it)
+from scenes.world import ROBOT_CONAFFINITY, ROBOT_CONTYPE, ROBOT_GROUP
+
 CHASSIS_BODY = "chassis"
 
 

@@ -7,6 +7,19 @@ import dataclasses
 import numpy as np
 
 
+FLIPPERS = ("front_left", "front_right", "rear_left", "rear_right")  # flipper order of every robot
+ARM_JOINTS = ("arm_1", "arm_2")
+# Named groups of position-controlled joints (control dimensions, observation parts, teleop keys).
+JOINT_GROUPS: dict[str, tuple[str, ...]] = {
+    "flippers": tuple(f"flipper_{f}" for f in FLIPPERS),
+    "front": ("flipper_front_left", "flipper_front_right"),
+    "rear": ("flipper_rear_left", "flipper_rear_right"),
+    **{f: (f"flipper_{f}",) for f in FLIPPERS},
+    "arm": ARM_JOINTS,
+    **{a: (a,) for a in ARM_JOINTS},
+}
+
+
 @dataclasses.dataclass(frozen=True)
 class CapsuleSegment:
   """A collision capsule along a belt's axis, in the belt body's frame."""
@@ -31,11 +44,13 @@ class FlipperSpec:
 def four_flippers(pivot_x: float, pivot_y: float, segments: tuple[CapsuleSegment, ...],
                   mass: float) -> tuple[FlipperSpec, ...]:
   """Front-left, front-right, rear-left, rear-right flippers on pivots at (+-x, +-y, 0) m."""
-  return tuple(
-      FlipperSpec(name=f"{end}_{side_name}", pivot=(pivot_x * direction, pivot_y * side, 0.0),
-                  direction=direction, side=side, segments=segments, mass=mass)
-      for end, direction in (("front", 1.0), ("rear", -1.0))
-      for side_name, side in (("left", 1.0), ("right", -1.0)))
+  def flipper(name: str) -> FlipperSpec:
+    direction = 1.0 if name.startswith("front") else -1.0
+    side = 1.0 if name.endswith("left") else -1.0
+    return FlipperSpec(name=name, pivot=(pivot_x * direction, pivot_y * side, 0.0),
+                       direction=direction, side=side, segments=segments, mass=mass)
+
+  return tuple(flipper(name) for name in FLIPPERS)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -108,10 +123,16 @@ class RobotSpec:
     return np.array(lims, dtype=np.float32)
 
   def joint_names(self) -> tuple[str, ...]:
+    """Position-controlled joints: flippers in FLIPPERS order, then the arm."""
     names = tuple(f"flipper_{f.name}" for f in self.flippers)
-    if self.arm is not None:
-      names += ("arm_1", "arm_2")
-    return names
+    return names + (ARM_JOINTS if self.arm is not None else ())
+
+  def joint_index(self, group: str) -> np.ndarray:
+    """Indices (into joint_names()) of a named joint group; empty where the robot lacks it."""
+    if group not in JOINT_GROUPS:
+      raise KeyError(f"unknown joint group {group!r}; known: {sorted(JOINT_GROUPS)}")
+    names = self.joint_names()
+    return np.array([names.index(j) for j in JOINT_GROUPS[group] if j in names], np.int32)
 
   def total_mass(self) -> float:
     m = self.chassis_mass + 2 * self.track_mass + sum(f.mass for f in self.flippers)

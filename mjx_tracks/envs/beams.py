@@ -19,8 +19,10 @@ import jax.numpy as jnp
 import numpy as np
 from mujoco import mjx
 
+from scenes.world import WORLD_GROUP
+
 FEATURE_MAX = 3.0  # m
-WORLD_GROUPS = (1, 0, 0, 0, 0, 0)  # rays see geom group 0 (world) only, never the robot
+RAY_GROUPS = tuple(int(g == WORLD_GROUP) for g in range(6))  # rays see the world only, never the robot
 
 
 @dataclasses.dataclass(frozen=True)
@@ -29,7 +31,8 @@ class BeamLayout:
 
   dirs: np.ndarray  # (n_rays, 3), camera frame (x right, y up, looking along -z), z = -1
   band: np.ndarray  # (n_rays,) feature index: vertical beams first, then horizontal
-  n_features: int
+  n_vertical: int
+  n_horizontal: int
   depth_range: tuple[float, float]  # m
   far: float  # m, camera far range
   noise: float  # probability that a ray is hidden
@@ -58,8 +61,12 @@ class BeamLayout:
       us.append(uu.ravel()); vs.append(vv.ravel()); bands.append(np.full(uu.size, n_vertical + k))
     u, v = np.concatenate(us or [np.zeros(0)]), np.concatenate(vs or [np.zeros(0)])
     dirs = np.stack([(u - w / 2) / f, -(v - h / 2) / f, -np.ones_like(u)], axis=-1).astype(np.float32)
-    return BeamLayout(dirs, np.concatenate(bands or [np.zeros(0)]).astype(np.int32), n_vertical + n_horizontal,
+    return BeamLayout(dirs, np.concatenate(bands or [np.zeros(0)]).astype(np.int32), n_vertical, n_horizontal,
                       tuple(depth_range), far, noise)
+
+  @property
+  def n_features(self) -> int:
+    return self.n_vertical + self.n_horizontal
 
   @property
   def n_rays(self) -> int:
@@ -85,7 +92,7 @@ class BeamLayout:
 def cast(layout: BeamLayout, m: mjx.Model, d: mjx.Data, cam_site: int) -> jax.Array:
   """z-depth of every ray from the camera site (m; -1 where nothing is hit)."""
   pnt, vecs = layout.world_rays(d.site_xpos[cam_site], d.site_xmat[cam_site])
-  dist, _ = jax.vmap(lambda v: mjx.ray(m, d, pnt, v, geomgroup=WORLD_GROUPS))(vecs)
+  dist, _ = jax.vmap(lambda v: mjx.ray(m, d, pnt, v, geomgroup=RAY_GROUPS))(vecs)
   return dist
 
 

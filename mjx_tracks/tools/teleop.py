@@ -13,24 +13,25 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mjx_tracks.control import INCREMENT, command_belt_speeds
+from mjx_tracks.robots.spec import RobotSpec
+from mjx_tracks.sim.control import INCREMENT, command_belt_speeds
 
 HELP = ("keys: w/s speed +-0.1 m/s, a/d yaw rate +-0.2 rad/s, space stop, "
         "i/k front flippers up/down, o/l rear flippers up/down, u/j arm 1, y/h arm 2, q quit")
 
-# key -> (joint indices, sign); joints: fl, fr, rl, rr, arm_1, arm_2
-_JOINT_KEYS = {"i": ((0, 1), 1), "k": ((0, 1), -1), "o": ((2, 3), 1), "l": ((2, 3), -1),
-               "u": ((4,), 1), "j": ((4,), -1), "y": ((5,), 1), "h": ((5,), -1)}
+# key -> (joint group, sign)
+_JOINT_KEYS = {"i": ("front", 1), "k": ("front", -1), "o": ("rear", 1), "l": ("rear", -1),
+               "u": ("arm_1", 1), "j": ("arm_1", -1), "y": ("arm_2", 1), "h": ("arm_2", -1)}
 
 
-def apply_key(key: str, v: float, w: float, targets: np.ndarray, limits: np.ndarray,
-              max_speed: float) -> tuple[float, float, np.ndarray, bool]:
+def apply_key(key: str, v: float, w: float, targets: np.ndarray, robot: RobotSpec
+              ) -> tuple[float, float, np.ndarray, bool]:
   """One key press -> new (v m/s, w rad/s, joint targets rad, quit?)."""
   targets = targets.copy()
   if key == "w":
-    v = min(v + 0.1, max_speed)
+    v = min(v + 0.1, robot.max_speed)
   elif key == "s":
-    v = max(v - 0.1, -max_speed)
+    v = max(v - 0.1, -robot.max_speed)
   elif key == "a":
     w += 0.2
   elif key == "d":
@@ -38,10 +39,10 @@ def apply_key(key: str, v: float, w: float, targets: np.ndarray, limits: np.ndar
   elif key == " ":
     v, w = 0.0, 0.0
   elif key in _JOINT_KEYS:
-    joints, sign = _JOINT_KEYS[key]
-    for j in joints:
-      if j < len(targets):
-        targets[j] = np.clip(targets[j] + sign * INCREMENT / 2, limits[j, 0], limits[j, 1])
+    group, sign = _JOINT_KEYS[key]
+    limits = robot.joint_limits()
+    for j in robot.joint_index(group):
+      targets[j] = np.clip(targets[j] + sign * INCREMENT / 2, limits[j, 0], limits[j, 1])
   return v, w, targets, key == "q"
 
 
@@ -64,7 +65,6 @@ def keyboard_rollout(setup, n_steps: int) -> np.ndarray:
   m = setup.model()
   step = jax.jit(lambda d, belts, tgt: sim.advance(m, d, belts, tgt, setup.substeps))
   d = setup.initial_data()
-  limits = sim.layout.joint_limits
   v, w, targets = 0.0, 0.0, np.zeros(sim.layout.n_joints, np.float32)
   print(HELP, file=sys.stderr)
   qpos = [np.asarray(d.qpos)]
@@ -72,7 +72,7 @@ def keyboard_rollout(setup, n_steps: int) -> np.ndarray:
     for _ in range(n_steps):
       t0 = time.time()
       while select.select([sys.stdin], [], [], 0)[0]:
-        v, w, targets, quit_ = apply_key(sys.stdin.read(1), v, w, targets, limits, robot.max_speed)
+        v, w, targets, quit_ = apply_key(sys.stdin.read(1), v, w, targets, robot)
         if quit_:
           return np.stack(qpos)
       belts = command_belt_speeds(v, w, robot.track_separation, robot.steering_efficiency,

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from mjx_tracks.config import available_tasks, load_config
-from mjx_tracks.env import TrackedRobotEnv
+from mjx_tracks.envs.config import available_tasks, load_config
+from mjx_tracks.envs.task_env import TrackedRobotEnv
 
 
 def load(task: str, overrides: Sequence[str] = ()) -> TrackedRobotEnv:

@@ -13,16 +13,17 @@ import jax.numpy as jnp
 from brax.envs.base import Env, State
 from flax import struct
 from mujoco import mjx
-from mujoco.mjx._src import smooth
 
-from mjx_tracks.beams import BeamLayout, depth_beams
-from mjx_tracks.config import ConfigError, TaskConfig
-from mjx_tracks.control import Controller
-from mjx_tracks.monitor import REWARD_TERMS, Monitor, cog_deviation, goal_distance, normalizer_init
-from mjx_tracks.physics import PhysicsConfig
-from mjx_tracks.pose import chassis_rpy
+from mjx_tracks.envs.beams import BeamLayout, depth_beams
+from mjx_tracks.envs.config import ConfigError, TaskConfig
+from mjx_tracks.envs.observations import Sensors, observe, part_sizes
+from mjx_tracks.envs.rewards import (REWARD_TERMS, Monitor, cog_deviation, goal_distance, normalizer_init,
+                                     on_stairs)
 from mjx_tracks.robots import get_robot
-from mjx_tracks.sim import Simulator
+from mjx_tracks.sim import mjx_private
+from mjx_tracks.sim.control import Controller
+from mjx_tracks.sim.pose import chassis_rpy
+from mjx_tracks.sim.simulator import Simulator
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
 from scenes.scene import SceneState
@@ -70,10 +71,8 @@ class TrackedRobotEnv(Env):
     except ValueError as e:
       raise ConfigError(f"control: {e}") from e
     self.scene = _make_scene(cfg)
-    p = cfg.physics
-    self.sim = Simulator.create(self.robot, self.scene.world_xml(),
-                                PhysicsConfig(p.timestep, p.solver_iterations, p.ls_iterations))
-    self.substeps = int(round(cfg.control.period / p.timestep))
+    self.sim = Simulator.create(self.robot, self.scene.world_xml(), cfg.physics)
+    self.substeps = int(round(cfg.control.period / cfg.physics.timestep))
     o = cfg.observation
     self.beams = BeamLayout.create(
         self.robot.camera_hfov, self.robot.camera_resolution,
@@ -83,14 +82,12 @@ class TrackedRobotEnv(Env):
     self.monitor = Monitor(cfg.reward, cfg.episode)
     c = cfg.scene.curriculum
     self.curriculum = Curriculum(window=c.window, rule=c.rule)
-    self._part_sizes = {"v": 1, "w": 1, "flippers": 4, "flippers_paired": 2, "arm": 2, "pitch": 1,
-                        "roll": 1, "heading": 1, "goal_distance": 1, "angular_velocity": 3,
-                        "vertical_beams": o.vertical_beams, "horizontal_beams": o.horizontal_beams}
+    self.part_sizes = part_sizes(o.parts, self.robot, self.beams.n_vertical, self.beams.n_horizontal)
 
   # --- Brax Env interface -------------------------------------------------------------------
   @property
   def observation_size(self) -> int:
-    return sum(self._part_sizes[p] for p in self.cfg.observation.parts)
+    return sum(self.part_sizes.values())
 
   @property
   def action_size(self) -> int:
@@ -117,7 +114,7 @@ class TrackedRobotEnv(Env):
     rpy = chassis_rpy(data.qpos)
     dist = goal_distance(pos, es.scene.goal, es.scene.goal_halfwidth, self.cfg.episode.goal_tolerance)
     cog, on_stairs = self._cog(data, es.scene)
-    pitch_rate = jnp.abs(data.qvel[4])
+    pitch_rate = jnp.abs(data.qvel[4])  # rad/s, chassis-frame pitch rate
     sample = self.monitor.safety_sample(cog, pitch_rate)
     window = jnp.roll(es.window, 1).at[0].set(sample)
     terms, progress, closest, terminated, flags = self.monitor.evaluate(
@@ -155,7 +152,7 @@ class TrackedRobotEnv(Env):
   # --- sensors ------------------------------------------------------------------------------
   def _sense(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:
     """Positions, orientations and centre of mass consistent with the current qpos."""
-    return smooth.com_pos(m, smooth.kinematics(m, d))
+    return mjx_private.kinematics(m, d)
 
   def _cog(self, d: mjx.Data, scene: SceneState) -> tuple[jax.Array, jax.Array]:
     """COG deviation (m) and whether the robot is on the stairs (1.0 / 0.0)."""
@@ -164,44 +161,23 @@ class TrackedRobotEnv(Env):
     st: Staircase = self.scene.stairs(scene.xi)
     body = self.sim.layout.chassis_body
     x = d.xpos[body][0]
-    on = (x >= -0.3) & (x <= st.top_edge_x() + 0.3)
+    on = on_stairs(x, st.top_edge_x())
     dev = cog_deviation(d.subtree_com[body], d.xpos[body], jnp.arctan2(st.riser, st.tread))
     return jnp.where(on, dev, 0.0), on.astype(jnp.float32)
 
-  def imu(self, d: mjx.Data) -> dict[str, jax.Array]:
-    """Pitch, roll (rad), body angular velocity (rad/s), body linear velocity (m/s), joints, pose."""
-    rot = d.xmat[self.sim.layout.chassis_body]
-    rpy = chassis_rpy(d.qpos)
-    return {"roll": rpy[0], "pitch": rpy[1], "yaw": rpy[2], "angular_velocity": d.qvel[3:6],
-            "linear_velocity": rot.T @ d.qvel[0:3], "joints": d.qpos[self.sim.layout.joint_qpos],
-            "position": d.qpos[0:3], "quaternion": d.qpos[3:7]}
-
-  def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array) -> jax.Array:
+  def sensors(self, es: EnvState, m: mjx.Model, key: jax.Array) -> Sensors:
+    """Every reading an observation part may use (mjx_tracks.envs.observations)."""
     d = es.data
-    imu = self.imu(d)
-    joints = imu["joints"]
-    o = self.cfg.observation
     beams = (depth_beams(self.beams, m, d, self.sim.layout.camera_site, key)
              if self.beams.n_features else jnp.zeros(0))
-    pos = imu["position"]
-    to_goal = es.scene.goal - pos
-    heading = jnp.arctan2(to_goal[1], to_goal[0]) - imu["yaw"]
-    part = {
-        "v": lambda: imu["linear_velocity"][:1],
-        "w": lambda: d.qvel[5:6],
-        "flippers": lambda: joints[:4],
-        "flippers_paired": lambda: jnp.stack([joints[:2].mean(), joints[2:4].mean()]),
-        "arm": lambda: joints[4:6],
-        "pitch": lambda: imu["pitch"][None],
-        "roll": lambda: imu["roll"][None],
-        "heading": lambda: jnp.arctan2(jnp.sin(heading), jnp.cos(heading))[None],
-        "goal_distance": lambda: jnp.linalg.norm(to_goal)[None],
-        "angular_velocity": lambda: imu["angular_velocity"],
-        "vertical_beams": lambda: beams[: o.vertical_beams],
-        "horizontal_beams": lambda: beams[self.beams.n_features - o.horizontal_beams:],
-    }
-    obs = jnp.concatenate([part[p]() for p in o.parts])
-    return jnp.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
+    rot = d.xmat[self.sim.layout.chassis_body]
+    return Sensors(linear_velocity=rot.T @ d.qvel[0:3], angular_velocity=d.qvel[3:6],
+                   rpy=chassis_rpy(d.qpos), joints=d.qpos[self.sim.layout.joint_qpos],
+                   position=d.qpos[0:3], goal=es.scene.goal,
+                   vertical_beams=beams[: self.beams.n_vertical], horizontal_beams=beams[self.beams.n_vertical:])
+
+  def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array) -> jax.Array:
+    return observe(self.cfg.observation.parts, self.sensors(es, m, key), self.robot)
 
   def _metrics(self, terms, progress, cog, on_stairs, pitch_rate, flags, nan) -> dict[str, jax.Array]:
     f = lambda x: jnp.asarray(x, jnp.float32)
@@ -215,11 +191,8 @@ class TrackedRobotEnv(Env):
 
 def observation_names(env: TrackedRobotEnv) -> list[str]:
   """One name per observation entry, in order."""
-  names = []
-  for p in env.cfg.observation.parts:
-    n = env._part_sizes[p]
-    names += [p] if n == 1 else [f"{p}[{i}]" for i in range(n)]
-  return names
+  from mjx_tracks.envs.observations import observation_names as names  # noqa: PLC0415
+  return names(env.cfg.observation.parts, env.part_sizes)
 
 
 __all__ = ["EnvState", "TrackedRobotEnv", "METRICS", "observation_names"]

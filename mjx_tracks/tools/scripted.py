@@ -9,6 +9,14 @@ import jax.numpy as jnp
 from mjx_tracks.robots.spec import RobotSpec
 
 
+def joint_targets(robot: RobotSpec, by_group: dict[str, jnp.ndarray]) -> jnp.ndarray:
+  """Joint target vector (rad, joint_names() order) from angles per joint group; others 0."""
+  targets = jnp.zeros(len(robot.joint_names()), jnp.float32)
+  for group, angle in by_group.items():
+    targets = targets.at[robot.joint_index(group)].set(jnp.asarray(angle, jnp.float32))
+  return targets
+
+
 @dataclasses.dataclass(frozen=True)
 class StairScript:
   """Pitch-driven rules; angles in rad, speeds in m/s."""
@@ -24,19 +32,11 @@ class StairScript:
       on_stairs = nose_up >= self.climb_pitch
       # approach: front flippers raised to hook the first edge; climbing: flippers in line,
       # rear pair pushing down a little; arm payload forward to keep the COG ahead.
-      front = jnp.where(on_stairs, 0.0, lim)
-      rear = jnp.where(on_stairs, -0.3, 0.0)
-      arm1 = 0.8 * jnp.clip(3.0 * nose_up, 0.0, 1.0)
-      speed = self.speed
-    else:
-      on_stairs = nose_up <= -self.climb_pitch
-      # descent: front flippers reach down to the next tread, then all flippers in line;
-      # arm payload backward.
-      front = jnp.where(on_stairs, 0.0, -lim)
-      rear = jnp.where(on_stairs, 0.0, 0.0)
-      arm1 = -0.8 * jnp.clip(-3.0 * nose_up, 0.0, 1.0)
-      speed = 0.75 * self.speed
-    targets = [front, front, rear, rear]
-    if robot.has_arm:
-      targets += [arm1, jnp.zeros_like(arm1)]
-    return speed, jnp.stack([jnp.asarray(t, jnp.float32) for t in targets])
+      return self.speed, joint_targets(robot, {
+          "front": jnp.where(on_stairs, 0.0, lim), "rear": jnp.where(on_stairs, -0.3, 0.0),
+          "arm_1": 0.8 * jnp.clip(3.0 * nose_up, 0.0, 1.0)})
+    on_stairs = nose_up <= -self.climb_pitch
+    # descent: front flippers reach down to the next tread, then all flippers in line; arm
+    # payload backward.
+    return 0.75 * self.speed, joint_targets(robot, {
+        "front": jnp.where(on_stairs, 0.0, -lim), "arm_1": -0.8 * jnp.clip(-3.0 * nose_up, 0.0, 1.0)})

@@ -18,8 +18,8 @@ from brax.envs.base import State, Wrapper
 from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
 from flax import struct
 
-from mjx_tracks.env import TrackedRobotEnv
-from mjx_tracks.monitor import PenaltyNormalizer, normalizer_init, normalizer_update
+from mjx_tracks.envs.task_env import TrackedRobotEnv
+from mjx_tracks.envs.rewards import PenaltyNormalizer, normalizer_init, normalizer_update
 from scenes.curriculum import CurriculumState
 
 
@@ -46,9 +46,13 @@ class CurriculumAutoReset(Wrapper):
     return GlobalStats(self.core.curriculum.init(), normalizer_init(self.core.cfg.reward))
 
   def reset(self, rng: jax.Array) -> State:
+    return self.reset_with(rng, self.initial_stats())
+
+  def reset_with(self, rng: jax.Array, glob: GlobalStats) -> State:
+    """Reset every environment at the difficulty of a given global state (e.g. kept across a
+    Gymnasium reset, or restored)."""
     state = self.env.reset(rng)
     n = rng.shape[0]
-    glob = self.initial_stats()
     fresh = jax.vmap(self.core.reset_at, in_axes=(0, None, None))(rng, glob.curriculum.eps, glob.normalizer.k)
     state = state.replace(pipeline_state=fresh.pipeline_state, obs=fresh.obs)
     state.info["global"] = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), glob)

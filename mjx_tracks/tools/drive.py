@@ -1,6 +1,6 @@
 """Drive one robot on one staircase by script or keyboard; write its trajectory and a summary.
 
-python -m mjx_tracks.drive --robot 1 --stairs 0.17,0.30,7 --direction up --seconds 20 \
+python -m mjx_tracks.tools.drive --robot 1 --stairs 0.17,0.30,7 --direction up --seconds 20 \
     [--controller scripted|keyboard] [--out traj.json] [--video out.mp4]
 """
 
@@ -16,11 +16,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mjx_tracks.control import command_belt_speeds
-from mjx_tracks.pose import chassis_rpy, tipped_over
+from mjx_tracks.envs.config import default_config
+from mjx_tracks.envs.rewards import goal_distance, goal_reached
 from mjx_tracks.robots import get_robot
-from mjx_tracks.scripted import StairScript
-from mjx_tracks.sim import Simulator, staircase_simulator
+from mjx_tracks.sim.control import command_belt_speeds
+from mjx_tracks.sim.pose import chassis_rpy, tipped_over
+from mjx_tracks.sim.simulator import Simulator, staircase_simulator
+from mjx_tracks.tools.scripted import StairScript
 from scenes import staircase as sc
 
 
@@ -32,6 +34,7 @@ class DriveSetup:
   stairs: sc.Staircase
   direction: str  # "up" | "down"
   control_period: float  # s
+  goal_tolerance: float  # m
 
   @property
   def substeps(self) -> int:
@@ -57,9 +60,10 @@ def parse_stairs(text: str) -> sc.Staircase:
     h, l, n = float(h), float(l), int(n)
   except ValueError:
     raise SystemExit(f"error: --stairs must be H,L,N (riser m, tread m, steps), got {text!r}")
-  if not (0.0 < h <= 0.4 and 0.1 <= l <= 1.0 and 1 <= n <= sc.N_MAX):
-    raise SystemExit(f"error: --stairs out of range: need 0 < H <= 0.4, 0.1 <= L <= 1.0, "
-                     f"1 <= N <= {sc.N_MAX}; got H={h}, L={l}, N={n}")
+  (l_lo, l_hi), (h_lo, h_hi), (n_lo, n_hi) = sc.STAIR_LIMITS
+  if not (h_lo <= h <= h_hi and l_lo <= l <= l_hi and n_lo <= n <= n_hi):
+    raise SystemExit(f"error: --stairs out of range: need {h_lo} <= H <= {h_hi}, {l_lo} <= L <= {l_hi}, "
+                     f"{n_lo} <= N <= {n_hi}; got H={h}, L={l}, N={n}")
   return sc.Staircase(jnp.float32(l), jnp.float32(h), jnp.int32(n))
 
 
@@ -86,22 +90,17 @@ def scripted_rollout(setup: DriveSetup, n_steps: int) -> np.ndarray:
 
 
 def summarize(setup: DriveSetup, qpos: np.ndarray) -> dict:
-  """Distance travelled, final height, max |pitch|, tipped over, top / bottom reached."""
+  """Distance travelled, final height, max |pitch|, tipped over, goal reached (the tasks' rule)."""
   rpy = np.asarray(chassis_rpy(jnp.asarray(qpos)))
   tipped = bool(np.asarray(tipped_over(jnp.asarray(rpy))).any())
   xyz = qpos[:, :3]
-  ground_z = xyz[:, 2] - setup.sim.robot.spawn_height  # m, belt bottom height
-  top_x, top_z = float(setup.stairs.top_edge_x()), float(setup.stairs.top_z())
-  if setup.direction == "up":
-    reached = bool(np.any((xyz[:, 0] > top_x + 0.3) & (ground_z > top_z - 0.03)))
-  else:
-    reached = bool(np.any((xyz[:, 0] < -0.3) & (ground_z < 0.03)))
+  dist = goal_distance(jnp.asarray(xyz), setup.goal(), sc.GOAL_HALFWIDTH, setup.goal_tolerance)
   return {
       "distance_m": float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum()),
-      "final_height_m": float(ground_z[-1]),
+      "final_height_m": float(xyz[-1, 2] - setup.sim.robot.spawn_height),
       "max_abs_pitch_rad": float(np.abs(rpy[:, 1]).max()),
       "tipped_over": tipped,
-      "goal_reached": reached and not tipped,
+      "goal_reached": bool(np.asarray(goal_reached(dist)).any()) and not tipped,
   }
 
 
@@ -125,7 +124,7 @@ def trajectory_record(setup: DriveSetup, qpos: np.ndarray, summary: dict) -> dic
 
 
 def main(argv: list[str] | None = None) -> int:
-  p = argparse.ArgumentParser(prog="python -m mjx_tracks.drive", description=__doc__.splitlines()[0])
+  p = argparse.ArgumentParser(prog="python -m mjx_tracks.tools.drive", description=__doc__.splitlines()[0])
   p.add_argument("--robot", default="1", help="1 (Jaguar with arm) or 2 (Absolem)")
   p.add_argument("--stairs", default="0.17,0.30,7", help="riser H (m), tread L (m), steps N")
   p.add_argument("--direction", choices=("up", "down"), default="up")
@@ -141,29 +140,29 @@ def main(argv: list[str] | None = None) -> int:
     raise SystemExit(f"error: {e.args[0]}")
   if not 0 < args.seconds <= 600:
     raise SystemExit("error: --seconds must be in (0, 600]")
-  setup = DriveSetup(staircase_simulator(robot), parse_stairs(args.stairs), args.direction,
-                     args.control_period)
+  defaults = default_config()
+  setup = DriveSetup(staircase_simulator(robot, defaults.physics), parse_stairs(args.stairs), args.direction,
+                     args.control_period, defaults.episode.goal_tolerance)
   n_steps = max(1, round(args.seconds / args.control_period))
   t0 = time.time()
   if args.controller == "scripted":
     print(f"compiling and simulating {args.seconds:g} s on {jax.default_backend()} ...", file=sys.stderr)
     qpos = scripted_rollout(setup, n_steps)
   else:
-    from mjx_tracks.teleop import keyboard_rollout  # noqa: PLC0415
+    from mjx_tracks.tools.teleop import keyboard_rollout  # noqa: PLC0415
     qpos = keyboard_rollout(setup, n_steps)
   summary = summarize(setup, qpos)
   if args.out:
     with open(args.out, "w") as f:
       json.dump(trajectory_record(setup, qpos, summary), f)
   if args.video:
-    from mjx_tracks.render import render_frames, write_video  # noqa: PLC0415
+    from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
     mj = setup.sim.c_model_with_boxes(*sc.step_boxes(setup.stairs))
     write_video(args.video, render_frames(mj, qpos), fps=1.0 / args.control_period)
-  target = "top" if args.direction == "up" else "bottom"
   print(f"{robot.name} {args.direction} h={float(setup.stairs.riser):.2f} l={float(setup.stairs.tread):.2f} "
         f"n={int(setup.stairs.steps)}: distance {summary['distance_m']:.2f} m, final height "
         f"{summary['final_height_m']:.2f} m, max |pitch| {summary['max_abs_pitch_rad']:.2f} rad, "
-        f"tipped over: {'yes' if summary['tipped_over'] else 'no'}, {target} reached: "
+        f"tipped over: {'yes' if summary['tipped_over'] else 'no'}, goal reached: "
         f"{'yes' if summary['goal_reached'] else 'no'} ({time.time() - t0:.1f} s wall)")
   return 0
 

@@ -36,9 +36,9 @@ import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
-from mujoco.mjx._src import constraint as mjx_constraint
 
-from mjx_tracks.layout import BELT_SIDE, Layout
+from mjx_tracks.sim import mjx_private
+from mjx_tracks.sim.layout import BELT_SIDE, Layout
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,12 +57,10 @@ class TrackModel:
   @staticmethod
   def create(m: mujoco.MjModel, layout: Layout, mu_along: float, mu_across: float,
              track_separation: float, steering_efficiency: float) -> "TrackModel":
-    efc_type = mjx_constraint.make_efc_type(m)
-    ne, nf, nl, _ = mjx_constraint.counts(efc_type)
     return TrackModel(geom_belt=layout.geom_belt, belt_side=BELT_SIDE,
                       chassis_body=layout.chassis_body, mu_along=mu_along, mu_across=mu_across,
                       track_separation=track_separation, steering_efficiency=steering_efficiency,
-                      contact_row0=int(ne + nf + nl))
+                      contact_row0=mjx_private.contact_row0(m))
 
 
 def _normalize(x: jax.Array, eps: float = 1e-9) -> tuple[jax.Array, jax.Array]:
@@ -76,7 +74,7 @@ def contact_belt_velocity(m, d, tm: TrackModel, belt_speeds: jax.Array):
   The target velocity (world, m/s) is that of the belt surface relative to its body, plus the
   turn's lateral skid: the ground moves at it relative to the robot's contact point.
   """
-  c = d._impl.contact
+  c = mjx_private.contacts(d)
   geom_belt = jnp.asarray(tm.geom_belt)
   b1, b2 = geom_belt[c.geom[:, 0]], geom_belt[c.geom[:, 1]]
   first = b1 >= 0
@@ -109,7 +107,7 @@ def contact_belt_velocity(m, d, tm: TrackModel, belt_speeds: jax.Array):
 
 def apply_belt_contacts(m, d, tm: TrackModel, belt_speeds: jax.Array):
   """Turns belt contacts' frames and friction; returns (data, per-contact target slips (ncon, 2))."""
-  c = d._impl.contact
+  c = mjx_private.contacts(d)
   on_belt, sign, u_dir, target = contact_belt_velocity(m, d, tm, belt_speeds)
   n = c.frame[:, 0]
   t1, t1_norm = _normalize(u_dir - jnp.sum(u_dir * n, -1, keepdims=True) * n)
@@ -121,19 +119,19 @@ def apply_belt_contacts(m, d, tm: TrackModel, belt_speeds: jax.Array):
   u_vec = sign[:, None] * target
   slip = jnp.stack([jnp.sum(u_vec * t1, -1), jnp.sum(u_vec * t2, -1)], axis=-1)
   slip = jnp.where(valid[:, None], slip, 0.0)
-  d = d.tree_replace({"_impl.contact": c.replace(frame=frame, friction=friction)})
+  d = mjx_private.with_contacts(d, c.replace(frame=frame, friction=friction))
   return d, slip
 
 
 def aref_shift(m, d, tm: TrackModel, slip: jax.Array) -> jax.Array:
   """Change of efc_aref that makes the friction rows target the belt slip instead of zero."""
-  c = d._impl.contact
+  c = mjx_private.contacts(d)
   ncon = c.dist.shape[0]
   pos = c.dist - c.includemargin
-  _, b, _ = jax.vmap(lambda sr, si, p: mjx_constraint._kbi(m, sr, si, p))(c.solref, c.solimp, pos)
+  b = mjx_private.contact_damping(m, c.solref, c.solimp, pos)
   active = (pos < 0).astype(slip.dtype)
   per_dir = (b * active)[:, None] * c.friction[:, :2] * slip  # (ncon, 2)
   rows = jnp.stack([per_dir[:, 0], -per_dir[:, 0], per_dir[:, 1], -per_dir[:, 1]], axis=1)
-  nefc = d._impl.efc_aref.shape[0]
+  nefc = mjx_private.efc_rows(d)
   shift = jnp.zeros(nefc, rows.dtype)
   return jax.lax.dynamic_update_slice(shift, rows.reshape(4 * ncon), (tm.contact_row0,))

@@ -1,19 +1,32 @@
 """Typed task configuration: configs/defaults.yaml <- configs/TASK.yaml <- dotted overrides.
 
-Every section is a frozen dataclass; loading checks each key exists, each value's type, and each
-range, and fails with a message that names the dotted key.
+Every section is a frozen dataclass with no defaults of its own: configs/defaults.yaml holds the
+default of every key (with its unit and meaning). Loading checks that each key exists, each value's
+type and each range, and fails with a message that names the dotted key.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import importlib.resources
 import pathlib
 import typing
 from typing import Any
 
 import yaml
 
-CONFIG_DIR = pathlib.Path(__file__).resolve().parent.parent / "configs"
+from mjx_tracks.sim.physics import PhysicsConfig
+
+DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
+
+
+def config_dir():
+  """The task YAML files: package data `mjx_tracks.configs` once installed, else (a source
+  checkout on PYTHONPATH) the repository's configs/."""
+  try:
+    return importlib.resources.files("mjx_tracks.configs")
+  except ModuleNotFoundError:
+    return pathlib.Path(__file__).resolve().parents[2] / "configs"
 
 
 class ConfigError(ValueError):
@@ -27,13 +40,13 @@ def _check(cond: bool, key: str, msg: str) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class ControlConfig:
-  mode: str = "5dof_stairs"  # 4dof | 5dof_stairs | 6dof | 8dof
-  increments: bool = True  # the original's +-pi/10 increments, else absolute targets
-  v_range: tuple[float, float] = (0.0, 1.0)  # m/s
-  period: float = 0.25  # s between actions
+  mode: str  # mjx_tracks.sim.control.CONTROL_MODES
+  increments: bool  # the original's +-pi/10 increments, else absolute targets
+  v_range: tuple[float, float]  # m/s
+  period: float  # s between actions
 
   def validate(self, key: str) -> None:
-    from mjx_tracks.control import CONTROL_MODES  # noqa: PLC0415
+    from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
     _check(self.mode in CONTROL_MODES, f"{key}.mode", f"must be one of {sorted(CONTROL_MODES)}, got {self.mode!r}")
     _check(self.v_range[0] < self.v_range[1], f"{key}.v_range", "needs min < max")
     _check(0.01 <= self.period <= 2.0, f"{key}.period", f"must be in [0.01, 2] s, got {self.period}")
@@ -41,20 +54,18 @@ class ControlConfig:
 
 @dataclasses.dataclass(frozen=True)
 class ObservationConfig:
-  parts: tuple[str, ...] = ("v", "flippers", "arm", "pitch", "vertical_beams")
-  vertical_beams: int = 60  # N_v
-  horizontal_beams: int = 12  # N_h
-  band_px: int = 10  # px, width of the central band a beam averages over
-  rays_per_band: tuple[int, int] = (2, 2)  # rays cast per band (along, across)
-  depth_range: tuple[float, float] = (0.20, 1.50)  # m, hits outside are 0
-  noise: float = 0.0  # fraction of rays hidden (the reference: 0.1 of the image in patches)
-
-  PARTS = ("v", "w", "flippers", "flippers_paired", "arm", "pitch", "roll", "heading",
-           "goal_distance", "angular_velocity", "vertical_beams", "horizontal_beams")
+  parts: tuple[str, ...]  # names in mjx_tracks.envs.observations.PARTS
+  vertical_beams: int  # N_v
+  horizontal_beams: int  # N_h
+  band_px: int  # px, width of the central band a beam averages over
+  rays_per_band: tuple[int, int]  # rays cast per band (along, across)
+  depth_range: tuple[float, float]  # m, hits outside are 0
+  noise: float  # fraction of rays hidden
 
   def validate(self, key: str) -> None:
+    from mjx_tracks.envs.observations import PARTS  # noqa: PLC0415
     for p in self.parts:
-      _check(p in self.PARTS, f"{key}.parts", f"unknown part {p!r}; known: {self.PARTS}")
+      _check(p in PARTS, f"{key}.parts", f"unknown part {p!r}; known: {sorted(PARTS)}")
     _check(len(set(self.parts)) == len(self.parts), f"{key}.parts", "has duplicates")
     _check(1 <= self.vertical_beams <= 480, f"{key}.vertical_beams", "must be in [1, 480]")
     _check(1 <= self.horizontal_beams <= 640, f"{key}.horizontal_beams", "must be in [1, 640]")
@@ -66,50 +77,56 @@ class ObservationConfig:
 
 @dataclasses.dataclass(frozen=True)
 class CurriculumConfig:
-  window: int = 20  # N_e finished episodes
-  rule: str = "progress"  # "progress" (original code) | "return" (paper)
+  window: int  # N_e finished episodes
+  rule: str  # scenes.curriculum.RULES
 
   def validate(self, key: str) -> None:
-    _check(self.rule in ("progress", "return"), f"{key}.rule", "must be 'progress' or 'return'")
+    from scenes.curriculum import RULES  # noqa: PLC0415
+    _check(self.rule in RULES, f"{key}.rule", f"must be one of {RULES}, got {self.rule!r}")
     _check(self.window >= 1, f"{key}.window", "must be >= 1")
+
+
+_RENAMED_VARIANTS = {"paper": "paper_literal", "original": "original_code"}
 
 
 @dataclasses.dataclass(frozen=True)
 class SceneConfig:
-  kind: str = "stairs"  # stairs | nav
-  direction: str = "up"  # stairs: up | down
-  sampler: str = "incremental"  # uniform | incremental
-  variant: str = "difficulty"  # incremental: difficulty | paper_literal | original_code
-  tread: tuple[float, float] = (0.35, 0.52)  # m, l
-  riser: tuple[float, float] = (0.12, 0.22)  # m, h
-  steps: tuple[int, int] = (1, 7)  # n
-  nav_kinds: tuple[str, ...] = ("hallway", "zigzag")
-  random_spawn: bool = False
-  random_goal: bool = False
-  curriculum: CurriculumConfig = CurriculumConfig()
+  kind: str  # stairs | nav
+  direction: str  # stairs: up | down
+  sampler: str  # scenes.samplers.SAMPLERS
+  variant: str  # scenes.samplers.VARIANTS
+  tread: tuple[float, float]  # m, l
+  riser: tuple[float, float]  # m, h
+  steps: tuple[int, int]  # n
+  nav_kinds: tuple[str, ...]
+  random_spawn: bool
+  random_goal: bool
+  curriculum: CurriculumConfig
 
   def validate(self, key: str) -> None:
+    from scenes.samplers import SAMPLERS, VARIANTS  # noqa: PLC0415
+    from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
     _check(self.kind in ("stairs", "nav"), f"{key}.kind", "must be 'stairs' or 'nav'")
     _check(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
-    _check(self.sampler in ("uniform", "incremental"), f"{key}.sampler", "must be 'uniform' or 'incremental'")
-    from scenes.samplers import VARIANTS  # noqa: PLC0415
-    _check(self.variant in VARIANTS, f"{key}.variant", f"must be one of {VARIANTS}, got {self.variant!r}")
-    _check(0.1 <= self.tread[0] <= self.tread[1] <= 1.0, f"{key}.tread", "needs 0.1 <= min <= max <= 1.0 m")
-    _check(0.01 <= self.riser[0] <= self.riser[1] <= 0.4, f"{key}.riser", "needs 0.01 <= min <= max <= 0.4 m")
-    _check(1 <= self.steps[0] <= self.steps[1] <= 7, f"{key}.steps", "needs 1 <= min <= max <= 7")
+    _check(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
+    hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
+    _check(self.variant in VARIANTS, f"{key}.variant", f"must be one of {VARIANTS}, got {self.variant!r}{hint}")
+    for name, (lo, hi) in zip(STAIR_PARAMS, STAIR_LIMITS):
+      r = getattr(self, name)
+      _check(lo <= r[0] <= r[1] <= hi, f"{key}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(r)}")
     self.curriculum.validate(f"{key}.curriculum")
 
 
 @dataclasses.dataclass(frozen=True)
 class RewardConfig:
-  kind: str = "cog"  # free | cog | angular
-  progress_scale: float = 1.0
-  cog_scale: float = 0.05  # per-step COG deviation penalty weight (1/m)
-  angular_scale: float = 0.05  # per-step |pitch rate| penalty weight (s/rad)
-  tipover_penalty: float = 1.0
-  normalize_penalties: bool = False  # the original's K = 1 / mean penalty sum of the first episodes
-  normalize_episodes: int = 30
-  safety_window: int = 5  # samples averaged by the penalty
+  kind: str  # free | cog | angular
+  progress_scale: float
+  cog_scale: float  # per-step COG deviation penalty weight (1/m)
+  angular_scale: float  # per-step |pitch rate| penalty weight (s/rad)
+  tipover_penalty: float
+  normalize_penalties: bool  # the original's K = 1 / mean penalty sum of the first episodes
+  normalize_episodes: int
+  safety_window: int  # samples averaged by the penalty
 
   def validate(self, key: str) -> None:
     _check(self.kind in ("free", "cog", "angular"), f"{key}.kind", "must be 'free', 'cog' or 'angular'")
@@ -121,9 +138,9 @@ class RewardConfig:
 
 @dataclasses.dataclass(frozen=True)
 class EpisodeConfig:
-  max_steps: int = 50  # control steps
-  goal_tolerance: float = 0.3  # m, subtracted from the goal distance (reference)
-  away_factor: float = 1.2  # terminate when dist > away_factor * d0
+  max_steps: int  # control steps
+  goal_tolerance: float  # m, subtracted from the goal distance (reference)
+  away_factor: float  # terminate when dist > away_factor * d0
 
   def validate(self, key: str) -> None:
     _check(1 <= self.max_steps <= 100_000, f"{key}.max_steps", "must be in [1, 100000]")
@@ -132,36 +149,32 @@ class EpisodeConfig:
 
 
 @dataclasses.dataclass(frozen=True)
-class PhysicsSection:
-  timestep: float = 0.01  # s
-  solver_iterations: int = 4
-  ls_iterations: int = 6
-
-  def validate(self, key: str) -> None:
-    _check(0.0005 <= self.timestep <= 0.02, f"{key}.timestep", "must be in [0.0005, 0.02] s")
-    _check(self.solver_iterations >= 1, f"{key}.solver_iterations", "must be >= 1")
-    _check(self.ls_iterations >= 1, f"{key}.ls_iterations", "must be >= 1")
-
-
-@dataclasses.dataclass(frozen=True)
 class TaskConfig:
-  task: str = "unnamed"
-  robot: str = "1"
-  control: ControlConfig = ControlConfig()
-  observation: ObservationConfig = ObservationConfig()
-  scene: SceneConfig = SceneConfig()
-  reward: RewardConfig = RewardConfig()
-  episode: EpisodeConfig = EpisodeConfig()
-  physics: PhysicsSection = PhysicsSection()
+  """A task: every section; the defaults of every key live in configs/defaults.yaml."""
+
+  task: str
+  robot: str
+  control: ControlConfig
+  observation: ObservationConfig
+  scene: SceneConfig
+  reward: RewardConfig
+  episode: EpisodeConfig
+  physics: PhysicsConfig
 
   def validate(self, key: str = "") -> None:
-    _check(str(self.robot) in ("1", "2", "jaguar", "absolem"), "robot", "must be 1 or 2")
+    from mjx_tracks.robots import ROBOTS  # noqa: PLC0415
+    _check(str(self.robot) in ROBOTS, "robot", f"must be one of {sorted(ROBOTS)}, got {self.robot!r}")
     for f in dataclasses.fields(self):
       v = getattr(self, f.name)
       if dataclasses.is_dataclass(v):
-        v.validate(f.name)
+        try:
+          v.validate(f.name)
+        except ConfigError:
+          raise
+        except ValueError as e:
+          raise ConfigError(str(e)) from e
     if self.scene.kind == "nav":
-      from mjx_tracks.control import CONTROL_MODES  # noqa: PLC0415
+      from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
       _check("w" in CONTROL_MODES[self.control.mode], "control.mode",
              "navigation needs a mode with angular velocity w")
     steps = self.control.period / self.physics.timestep
@@ -209,11 +222,12 @@ def _convert(value: Any, tp: Any, key: str) -> Any:
 
 def _build(cls, raw: dict, key: str):
   hints = typing.get_type_hints(cls)
-  names = {f.name for f in dataclasses.fields(cls)}
+  names = [f.name for f in dataclasses.fields(cls)]
   for k in raw:
     _check(k in names, f"{key}.{k}".lstrip("."), f"unknown key; known: {sorted(names)}")
-  kwargs = {k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()}
-  return cls(**kwargs)
+  missing = [n for n in names if n not in raw]
+  _check(not missing, key or "config", f"missing keys {missing}")
+  return cls(**{k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()})
 
 
 def _merge(base: dict, over: dict, key: str = "") -> dict:
@@ -240,30 +254,39 @@ def _apply_override(raw: dict, item: str) -> dict:
   return _merge(raw, patch)
 
 
+def _read_yaml(name: str) -> dict:
+  loaded = yaml.safe_load(config_dir().joinpath(f"{name}.yaml").read_text()) or {}
+  if not isinstance(loaded, dict):
+    raise ConfigError(f"{name}.yaml: top level must be a mapping")
+  return loaded
+
+
 def available_tasks() -> list[str]:
   """Task names: every configs/*.yaml except defaults.yaml."""
-  return sorted(p.stem for p in CONFIG_DIR.glob("*.yaml") if p.stem != "defaults")
+  return sorted(p.name[:-5] for p in config_dir().iterdir()
+                if p.name.endswith(".yaml") and p.name[:-5] != DEFAULTS)
 
 
 def from_dict(raw: dict) -> TaskConfig:
-  """Builds and validates a TaskConfig from a (merged) plain mapping."""
+  """Builds and validates a TaskConfig from a complete plain mapping (e.g. a run's run.json)."""
   cfg = _build(TaskConfig, raw, "")
   cfg.validate()
   return cfg
 
 
+def default_config(overrides: typing.Sequence[str] = ()) -> TaskConfig:
+  """configs/defaults.yaml alone (plus overrides): the defaults of every key."""
+  raw = {"task": DEFAULTS, **_read_yaml(DEFAULTS)}
+  for item in overrides:
+    raw = _apply_override(raw, item)
+  return from_dict(raw)
+
+
 def load_config(task: str, overrides: typing.Sequence[str] = ()) -> TaskConfig:
   """configs/defaults.yaml <- configs/<task>.yaml <- overrides, validated."""
-  path = CONFIG_DIR / f"{task}.yaml"
-  if not path.exists():
+  if task not in available_tasks():
     raise ConfigError(f"unknown task {task!r}; available: {', '.join(available_tasks())}")
-  raw: dict = {}
-  for p in (CONFIG_DIR / "defaults.yaml", path):
-    if p.exists():
-      loaded = yaml.safe_load(p.read_text()) or {}
-      if not isinstance(loaded, dict):
-        raise ConfigError(f"{p.name}: top level must be a mapping")
-      raw = _merge(raw, loaded)
+  raw = _merge({"task": task, **_read_yaml(DEFAULTS)}, _read_yaml(task))
   for item in overrides:
     raw = _apply_override(raw, item)
   return from_dict(raw)

@@ -22,10 +22,11 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from mjx_tracks.config import EpisodeConfig, RewardConfig
-from mjx_tracks.pose import tipped_over
+from mjx_tracks.envs.config import EpisodeConfig, RewardConfig
+from mjx_tracks.sim.pose import tipped_over
 
 COG_MAX = 0.32  # m
+ON_STAIRS_MARGIN = 0.3  # m: "on the stairs" spans x in [-margin, top edge + margin] (chassis origin)
 REWARD_TERMS = ("progress", "safety", "tipover")
 
 
@@ -46,6 +47,11 @@ def progress_step(dist: jax.Array, closest: jax.Array, d0: jax.Array) -> tuple[j
   dist = jnp.maximum(dist, 0.0)
   gain = jnp.maximum(closest - dist, 0.0) / jnp.maximum(d0, 1e-6)
   return gain, jnp.minimum(closest, dist)
+
+
+def on_stairs(x: jax.Array, top_edge_x: jax.Array) -> jax.Array:
+  """Whether the chassis origin's x (m) lies over the staircase (the COG deviation counts there)."""
+  return (x >= -ON_STAIRS_MARGIN) & (x <= top_edge_x + ON_STAIRS_MARGIN)
 
 
 def cog_deviation(com: jax.Array, chassis_pos: jax.Array, incline: jax.Array) -> jax.Array:

@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from mjx_tracks.robots.mjcf import CHASSIS_BODY
+from scenes.world import SCENE_BOX
 from mjx_tracks.robots.spec import RobotSpec
 
 BELTS = ("track_left", "track_right", "flipper_front_left", "flipper_front_right",
@@ -36,7 +37,6 @@ class Layout:
     return len(self.joint_qpos)
 
 
-SCENE_BOX = "scenebox"  # name prefix of the world's per-environment boxes (steps, obstacles)
 
 
 def resolve_layout(m: mujoco.MjModel, robot: RobotSpec) -> Layout:

@@ -8,22 +8,27 @@ import mujoco
 
 from mjx_tracks.robots.mjcf import actuators_xml, robot_body_xml
 from mjx_tracks.robots.spec import RobotSpec
+from mjx_tracks.sim import mjx_private
 
 
 @dataclasses.dataclass(frozen=True)
 class PhysicsConfig:
-  """MuJoCo options shared by every scene."""
+  """MuJoCo options shared by every scene (the `physics` section of a task config; defaults in
+  configs/defaults.yaml)."""
 
-  timestep: float = 0.01  # s, one physics substep
-  solver_iterations: int = 4  # Newton iterations
-  ls_iterations: int = 6  # line-search iterations
-  impratio: float = 1.0  # friction-to-normal impedance ratio
+  timestep: float  # s, one physics substep
+  solver_iterations: int  # Newton iterations
+  ls_iterations: int  # line-search iterations
+  impratio: float  # friction-to-normal impedance ratio
 
-  def validate(self) -> None:
+  def validate(self, key: str = "physics") -> None:
     if not 0.0005 <= self.timestep <= 0.02:
-      raise ValueError(f"physics.timestep must be in [0.0005, 0.02] s, got {self.timestep}")
-    if self.solver_iterations < 1 or self.ls_iterations < 1:
-      raise ValueError("physics.solver_iterations and physics.ls_iterations must be >= 1")
+      raise ValueError(f"{key}.timestep: must be in [0.0005, 0.02] s, got {self.timestep}")
+    for name in ("solver_iterations", "ls_iterations"):
+      if getattr(self, name) < 1:
+        raise ValueError(f"{key}.{name}: must be >= 1")
+    if self.impratio <= 0:
+      raise ValueError(f"{key}.impratio: must be > 0")
 
 
 def build_mjcf(robot: RobotSpec, world: str, physics: PhysicsConfig) -> str:
@@ -47,10 +52,8 @@ def build_mjcf(robot: RobotSpec, world: str, physics: PhysicsConfig) -> str:
 
 
 def compile_model(robot: RobotSpec, world: str, physics: PhysicsConfig) -> mujoco.MjModel:
-  """Compiles the MJCF into a MuJoCo model; every collision geom must use condim 3."""
+  """Compiles the MJCF into a MuJoCo model and checks what the track model's step assumes."""
   physics.validate()
   m = mujoco.MjModel.from_xml_string(build_mjcf(robot, world, physics))
-  colliding = (m.geom_contype | m.geom_conaffinity) != 0
-  if (m.geom_condim[colliding] != 3).any():
-    raise ValueError("the track model expects condim 3 on every colliding geom")
+  mjx_private.check_model(m)
   return m

@@ -1,12 +1,16 @@
 """Gymnasium interfaces over the same jitted core: one robot (`Env`) and N robots (`VectorEnv`).
 
 Both use the task's batched stack (Vmap -> Episode -> curriculum auto-reset), so the curriculum
-runs exactly as in Brax training. The vector env resets finished robots in the same step
-(autoreset mode SAME_STEP; the last observation is in info["final_obs"]).
+runs exactly as in Brax training. The curriculum (eps and its window of finished episodes) lives
+across `reset()` calls of one Env or VectorEnv; `info["eps"]` reports it at every reset and step,
+`curriculum_state()` returns it and `set_curriculum_state()` restores it. The vector env resets
+finished robots in the same step (autoreset mode SAME_STEP; the last observation is in
+info["final_obs"]).
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Sequence
 
 import gymnasium as gym
@@ -16,14 +20,20 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from mjx_tracks.tasks import load
-from mjx_tracks.wrappers import batched_env
+from mjx_tracks.envs.registry import load
+from mjx_tracks.envs.wrappers import GlobalStats, batched_env
 
 
 def _spaces(core) -> tuple[gym.spaces.Box, gym.spaces.Box]:
   obs = gym.spaces.Box(-np.inf, np.inf, (core.observation_size,), np.float32)
   act = gym.spaces.Box(-1.0, 1.0, (core.action_size,), np.float32)
   return obs, act
+
+
+@functools.lru_cache(maxsize=8)
+def _stack(task: str, overrides: tuple[str, ...], n: int) -> "_Stack":
+  """One compiled stack per (task, overrides, n): a second Env of the same kind compiles nothing."""
+  return _Stack(task, overrides, n)
 
 
 class _Stack:
@@ -33,11 +43,17 @@ class _Stack:
     self.core = load(task, overrides)
     self.env = batched_env(self.core)
     self.n = n
-    self.reset = jax.jit(self.env.reset)
+    self.reset_with = jax.jit(self.env.reset_with)
     self.step = jax.jit(self.env.step)
+    self.initial = self.env.initial_stats()
 
-  def keys(self, seed: int) -> jax.Array:
-    return jax.random.split(jax.random.PRNGKey(seed), self.n)
+  def reset(self, seed: int, glob: GlobalStats):
+    return self.reset_with(jax.random.split(jax.random.PRNGKey(seed), self.n), glob)
+
+  @staticmethod
+  def global_stats(state) -> GlobalStats:
+    """The curriculum and penalty-normalizer state (identical in every environment)."""
+    return jax.tree_util.tree_map(lambda x: x[0], state.info["global"])
 
   def outputs(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     done = np.asarray(s.done, bool)
@@ -46,7 +62,7 @@ class _Stack:
 
 
 def _frame(core, state, index: int, width: int, height: int) -> np.ndarray:
-  from mjx_tracks.render import render_frames  # noqa: PLC0415
+  from mjx_tracks.tools.render import render_frames  # noqa: PLC0415
   es = jax.tree_util.tree_map(lambda x: np.asarray(x[index]), state.pipeline_state)
   mj = core.sim.c_model_with_boxes(es.scene.box_pos, es.scene.box_size)
   return render_frames(mj, es.data.qpos[None], width, height)[0]
@@ -61,21 +77,26 @@ class TrackedRobotGymEnv(gym.Env):
                render_size: tuple[int, int] = (320, 240)):
     if render_mode not in (None, "rgb_array"):
       raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-    self._stack = _Stack(task, overrides, 1)
+    self._stack = _stack(task, tuple(overrides), 1)
     self.observation_space, self.action_space = _spaces(self._stack.core)
     self.render_mode = render_mode
     self._size = render_size
     self._state = None
-    self._seed = 0
+    self._glob = self._stack.initial
     self.metadata = dict(self.metadata, render_fps=int(round(1 / self._stack.core.cfg.control.period)))
+
+  def curriculum_state(self) -> GlobalStats:
+    """The curriculum (and penalty normalizer) state, kept across resets."""
+    return self._glob if self._state is None else self._stack.global_stats(self._state)
+
+  def set_curriculum_state(self, glob: GlobalStats) -> None:
+    """Restores a state from curriculum_state(); the next reset draws at its eps."""
+    self._glob, self._state = glob, None
 
   def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
     super().reset(seed=seed)
-    if seed is not None:
-      self._seed = seed
-    else:
-      self._seed = int(self.np_random.integers(2**31))
-    self._state = self._stack.reset(self._stack.keys(self._seed))
+    self._glob = self.curriculum_state()
+    self._state = self._stack.reset(int(self.np_random.integers(2**31)), self._glob)
     return np.asarray(self._state.obs[0], np.float32), {"eps": float(self._state.info["eps"][0])}
 
   def step(self, action):
@@ -104,7 +125,7 @@ class TrackedRobotVectorEnv(VectorEnv):
                render_mode: str | None = None, render_size: tuple[int, int] = (320, 240)):
     if num_envs < 1:
       raise ValueError("num_envs must be >= 1")
-    self._stack = _Stack(task, overrides, num_envs)
+    self._stack = _stack(task, tuple(overrides), num_envs)
     self.num_envs = num_envs
     self.single_observation_space, self.single_action_space = _spaces(self._stack.core)
     self.observation_space = batch_space(self.single_observation_space, num_envs)
@@ -112,12 +133,21 @@ class TrackedRobotVectorEnv(VectorEnv):
     self.render_mode = render_mode
     self._size = render_size
     self._state = None
+    self._glob = self._stack.initial
+
+  def curriculum_state(self) -> GlobalStats:
+    """The curriculum (and penalty normalizer) state, kept across resets."""
+    return self._glob if self._state is None else self._stack.global_stats(self._state)
+
+  def set_curriculum_state(self, glob: GlobalStats) -> None:
+    """Restores a state from curriculum_state(); the next reset draws at its eps."""
+    self._glob, self._state = glob, None
 
   def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
     if seed is not None:
       self._np_random, self._np_random_seed = gym.utils.seeding.np_random(seed)
-    seed = int(self.np_random.integers(2**31)) if seed is None else seed
-    self._state = self._stack.reset(self._stack.keys(seed))
+    self._glob = self.curriculum_state()
+    self._state = self._stack.reset(int(self.np_random.integers(2**31)), self._glob)
     return np.asarray(self._state.obs, np.float32), {"eps": np.asarray(self._state.info["eps"])}
 
   def step(self, actions):

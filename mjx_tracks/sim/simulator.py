@@ -10,33 +10,21 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from mujoco import mjx
-from mujoco.mjx._src import collision_driver, constraint, forward, smooth, solver
 
-from mjx_tracks.layout import Layout, resolve_layout
-from mjx_tracks.physics import PhysicsConfig, compile_model
+from mjx_tracks.sim import mjx_private
+from mjx_tracks.sim.layout import Layout, resolve_layout
+from mjx_tracks.sim.physics import PhysicsConfig, compile_model
 from mjx_tracks.robots.spec import RobotSpec
-from mjx_tracks.tracks import TrackModel, apply_belt_contacts, aref_shift
+from mjx_tracks.sim.tracks import TrackModel, apply_belt_contacts, aref_shift
+
+
+SPAWN_CLEARANCE = 0.005  # m, the chassis spawns this far above resting height, then settles
 
 
 def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array) -> mjx.Data:
-  """One physics substep: mjx.forward with the belt contacts of the track model, then integrate."""
-  d = smooth.kinematics(m, d)
-  d = smooth.com_pos(m, d)
-  d = smooth.camlight(m, d)
-  d = smooth.tendon(m, d)
-  d = smooth.crb(m, d)
-  d = smooth.tendon_armature(m, d)
-  d = smooth.factor_m(m, d)
-  d = collision_driver.collision(m, d)
-  d, slip = apply_belt_contacts(m, d, tm, belt_speeds)
-  d = constraint.make_constraint(m, d)
-  d = d.tree_replace({"_impl.efc_aref": d._impl.efc_aref + aref_shift(m, d, tm, slip)})
-  d = smooth.transmission(m, d)
-  d = forward.fwd_velocity(m, d)
-  d = forward.fwd_actuation(m, d)
-  d = forward.fwd_acceleration(m, d)
-  d = solver.solve(m, d)
-  return forward.implicit(m, d)
+  """One physics substep: mjx.step with the belt contacts of the track model."""
+  return mjx_private.step(m, d, lambda m, d: apply_belt_contacts(m, d, tm, belt_speeds),
+                          lambda m, d, slip: aref_shift(m, d, tm, slip))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,7 +39,7 @@ class Simulator:
   tracks: TrackModel
 
   @staticmethod
-  def create(robot: RobotSpec, world_xml: str, physics: PhysicsConfig = PhysicsConfig()) -> "Simulator":
+  def create(robot: RobotSpec, world_xml: str, physics: PhysicsConfig) -> "Simulator":
     mj_model = compile_model(robot, world_xml, physics)
     layout = resolve_layout(mj_model, robot)
     tracks = TrackModel.create(mj_model, layout, robot.mu_along, robot.mu_across,
@@ -78,7 +66,7 @@ class Simulator:
   def init_data(self, pos: jax.Array, yaw: jax.Array, joint_angles: jax.Array | None = None) -> mjx.Data:
     """Data with the chassis resting at ground point pos (m) with heading yaw (rad)."""
     d = mjx.make_data(self.model, impl="jax")
-    qpos = d.qpos.at[0:3].set(pos + jnp.array([0.0, 0.0, self.robot.spawn_height + 0.005]))
+    qpos = d.qpos.at[0:3].set(pos + jnp.array([0.0, 0.0, self.robot.spawn_height + SPAWN_CLEARANCE]))
     qpos = qpos.at[3:7].set(jnp.stack([jnp.cos(yaw / 2), 0.0, 0.0, jnp.sin(yaw / 2)]))
     if joint_angles is not None:
       qpos = qpos.at[self.layout.joint_qpos].set(joint_angles)
@@ -100,13 +88,7 @@ class Simulator:
     return mjx.step(m, d)
 
 
-def staircase_simulator(robot: RobotSpec, physics: PhysicsConfig = PhysicsConfig(),
-                        n_max: int | None = None) -> Simulator:
+def staircase_simulator(robot: RobotSpec, physics: PhysicsConfig, n_max: int | None = None) -> Simulator:
   """A simulator of the robot in the staircase world (pool of step boxes)."""
   from scenes import staircase
   return Simulator.create(robot, staircase.world_xml(n_max or staircase.N_MAX), physics)
-
-
-def joint_angles(sim: Simulator, d: mjx.Data) -> jax.Array:
-  """Flipper and arm joint angles (rad)."""
-  return d.qpos[np.asarray(sim.layout.joint_qpos)]

@@ -19,7 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mjx_tracks.layout import BELT_SIDE
+from mjx_tracks.sim.layout import BELT_SIDE
 from mjx_tracks.robots.spec import RobotSpec
 
 INCREMENT = math.pi / 10  # rad per control step, the original's flipper / arm increment
@@ -32,12 +32,7 @@ CONTROL_MODES: dict[str, tuple[str, ...]] = {
     "5dof_stairs": ("v", "front", "rear", "arm_1", "arm_2"),
 }
 
-# Which joints an action dimension drives (joint order: fl, fr, rl, rr, arm_1, arm_2).
-_DRIVES = {
-    "front": (0, 1), "rear": (2, 3),
-    "front_left": (0,), "front_right": (1,), "rear_left": (2,), "rear_right": (3,),
-    "arm_1": (4,), "arm_2": (5,),
-}
+# Every action dimension but v and w names the joint group it drives (robots.spec.JOINT_GROUPS).
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,8 +64,8 @@ class Controller:
       raise ValueError(f"v_range {v_range} must lie inside +-{robot.max_speed} m/s with min < max")
     drive = np.zeros((n_joints, len(dims)), np.float32)
     for a, name in enumerate(dims):
-      for j in _DRIVES.get(name, ()):
-        drive[j, a] = 1.0
+      if name not in ("v", "w"):
+        drive[robot.joint_index(name), a] = 1.0
     return Controller(mode, dims, drive, robot.joint_limits(), tuple(v_range), robot.max_yaw_rate,
                       increments, robot.track_separation, robot.steering_efficiency,
                       robot.max_speed)

@@ -1,0 +1,1 @@
+"""Task environments: config, the Brax env, observations, rewards, wrappers, Gymnasium."""

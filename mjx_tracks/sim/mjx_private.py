@@ -1,0 +1,81 @@
+"""Every use of MJX's private API (`mujoco.mjx._src`, `Data._impl`) lives here, and only here.
+
+The track model needs to act between collision and the constraint solver, which MJX's public
+`mjx.step` does not allow, so `step` below runs `mjx.step`'s stages itself (mujoco-mjx 3.17.0).
+`check_model` asserts, when a model is compiled, the assumptions that makes: the implicitfast
+integrator (the step ends with `forward.implicit`), no sensors (sensor stages are skipped),
+pyramidal cones and condim 3 on every colliding geom (4 friction rows per contact).
+tests/test_mjx_private.py checks that `step` with no-op hooks equals `mjx.step` bit for bit, so an
+MJX upgrade that changes these stages fails there, not silently in the physics.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import jax
+import mujoco
+from mujoco import mjx
+from mujoco.mjx._src import collision_driver, constraint, forward, smooth, solver
+
+ContactHook = Callable[[mjx.Model, mjx.Data], tuple[mjx.Data, Any]]
+ArefHook = Callable[[mjx.Model, mjx.Data, Any], jax.Array]
+
+
+def check_model(m: mujoco.MjModel) -> None:
+  """Raises ValueError if the model breaks an assumption of `step`."""
+  if m.opt.integrator != mujoco.mjtIntegrator.mjINT_IMPLICITFAST:
+    raise ValueError("the track model's step needs integrator='implicitfast'")
+  if m.nsensor:
+    raise ValueError(f"the track model's step skips sensor stages; the model has {m.nsensor} sensors")
+  if m.opt.cone != mujoco.mjtCone.mjCONE_PYRAMIDAL:
+    raise ValueError("the track model needs cone='pyramidal' (4 friction rows per contact)")
+  colliding = (m.geom_contype | m.geom_conaffinity) != 0
+  if (m.geom_condim[colliding] != 3).any():
+    raise ValueError("the track model expects condim 3 on every colliding geom")
+
+
+def step(m: mjx.Model, d: mjx.Data, on_contacts: ContactHook, aref_shift: ArefHook) -> mjx.Data:
+  """mjx.step's stages; on_contacts edits the contacts after collision and returns auxiliary data,
+  aref_shift(m, d, aux) is added to the constraint rows' reference acceleration before solving."""
+  for stage in (smooth.kinematics, smooth.com_pos, smooth.camlight, smooth.tendon, smooth.crb,
+                smooth.tendon_armature, smooth.factor_m, collision_driver.collision):
+    d = stage(m, d)
+  d, aux = on_contacts(m, d)
+  d = constraint.make_constraint(m, d)
+  d = d.tree_replace({"_impl.efc_aref": d._impl.efc_aref + aref_shift(m, d, aux)})
+  for stage in (smooth.transmission, forward.fwd_velocity, forward.fwd_actuation,
+                forward.fwd_acceleration, solver.solve):
+    d = stage(m, d)
+  return forward.implicit(m, d)
+
+
+def contacts(d: mjx.Data):
+  """The contact struct (pos, frame, friction, dist, geom, solref, ...) of a step."""
+  return d._impl.contact
+
+
+def with_contacts(d: mjx.Data, contact) -> mjx.Data:
+  return d.tree_replace({"_impl.contact": contact})
+
+
+def efc_rows(d: mjx.Data) -> int:
+  """Number of constraint rows."""
+  return d._impl.efc_aref.shape[0]
+
+
+def contact_row0(m: mujoco.MjModel) -> int:
+  """First constraint row of the contacts (after equality, friction and limit rows)."""
+  ne, nf, nl, _ = constraint.counts(constraint.make_efc_type(m))
+  return int(ne + nf + nl)
+
+
+def contact_damping(m: mjx.Model, solref: jax.Array, solimp: jax.Array, pos: jax.Array) -> jax.Array:
+  """Per contact: the damping b of its constraint rows (aref = -b J qvel - k imp pos)."""
+  _, b, _ = jax.vmap(lambda sr, si, p: constraint._kbi(m, sr, si, p))(solref, solimp, pos)
+  return b
+
+
+def kinematics(m: mjx.Model, d: mjx.Data) -> mjx.Data:
+  """Body / geom / site poses and centres of mass consistent with qpos."""
+  return smooth.com_pos(m, smooth.kinematics(m, d))

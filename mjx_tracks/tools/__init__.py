@@ -1,0 +1,1 @@
+"""Tools around the simulator: driving by script or keyboard, scripted controller, rendering."""
