@@ -18,6 +18,7 @@ import jax.numpy as jnp
 
 from mjx_tracks.robots import get_robot
 from result_file import write_result
+from mjx_tracks.envs.config import default_config
 from mjx_tracks.sim.simulator import staircase_simulator
 from scenes import staircase as sc
 
@@ -56,7 +57,7 @@ def main(argv=None) -> int:
   p.add_argument("--robot", default="1")
   p.add_argument("--out")
   args = p.parse_args(argv)
-  sim = staircase_simulator(get_robot(args.robot))
+  sim = staircase_simulator(get_robot(args.robot), default_config().physics)
   k = args.substeps
   nj = sim.layout.n_joints
 

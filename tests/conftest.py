@@ -1,7 +1,7 @@
-"""Test set-up: CPU JAX, a persistent (git-ignored) compilation cache, shared compiled simulators."""
+"""Test set-up: CPU JAX, the persistent compilation cache (outside the clone), shared compiled
+simulators."""
 
 import os
-import pathlib
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 
@@ -9,22 +9,27 @@ import mjx_tracks  # noqa: E402,F401  (first: picks the headless GL backend befo
 import jax  # noqa: E402
 import pytest  # noqa: E402
 
-_CACHE = pathlib.Path(__file__).resolve().parent.parent / ".jax_cache"
-jax.config.update("jax_compilation_cache_dir", str(_CACHE))
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
-jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+from mjx_tracks import compile_cache  # noqa: E402
+
+compile_cache.enable()
 
 
 @pytest.fixture(scope="session")
-def jaguar_stairs():
+def default_physics():
+  from mjx_tracks.envs.config import default_config
+  return default_config().physics
+
+
+@pytest.fixture(scope="session")
+def jaguar_stairs(default_physics):
   """Robot 1 in the staircase world, compiled once for the whole session."""
   from mjx_tracks.robots import get_robot
   from mjx_tracks.sim.simulator import staircase_simulator
-  return staircase_simulator(get_robot(1))
+  return staircase_simulator(get_robot(1), default_physics)
 
 
 @pytest.fixture(scope="session")
-def absolem_stairs():
+def absolem_stairs(default_physics):
   from mjx_tracks.robots import get_robot
   from mjx_tracks.sim.simulator import staircase_simulator
-  return staircase_simulator(get_robot(2))
+  return staircase_simulator(get_robot(2), default_physics)

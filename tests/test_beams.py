@@ -73,8 +73,29 @@ def test_beam_layout_shape_and_noise():
   np.testing.assert_allclose(np.asarray(clean), 1.0)
   far = LAYOUT.features(jnp.full(LAYOUT.n_rays, 2.5))  # valid hit outside [0.2, 1.5] -> 0
   np.testing.assert_allclose(np.asarray(far), 0.0)
-  noisy = dict(vars(LAYOUT))
-  noisy["noise"] = 0.5
-  layout = BeamLayout(**noisy)
-  f = np.asarray(layout.features(jnp.full(layout.n_rays, -1.0), jax.random.PRNGKey(0)))
-  np.testing.assert_allclose(f, 0.0)  # nothing hit -> 0
+
+
+def test_beam_noise_hides_each_ray_with_its_probability():
+  """Each band casts 4 rays at depths 0.4, 0.6, 0.8, 1.0 m; a ray is hidden with probability p.
+  A band reads 0 only when all 4 are hidden (p^4), and otherwise the mean of its visible rays,
+  whose expectation is 0.7 m by symmetry."""
+  p = 0.5
+  layout = BeamLayout(**{**vars(LAYOUT), "noise": p})
+  depth = jnp.asarray(0.4 + 0.2 * _rank_within_band(layout.band), jnp.float32)
+  keys = jax.random.split(jax.random.PRNGKey(0), 400)
+  f = np.asarray(jax.vmap(lambda k: layout.features(depth, k))(keys)).ravel()
+  n = f.size
+  assert abs((f == 0).mean() - p**4) < 5 * np.sqrt(p**4 * (1 - p**4) / n)
+  visible = f[f > 0]
+  assert abs(visible.mean() - 0.7) < 0.01
+  clean = np.asarray(LAYOUT.features(depth))
+  np.testing.assert_allclose(clean, 0.7, atol=1e-6)  # no noise: every band's plain mean
+
+
+def _rank_within_band(band: np.ndarray) -> np.ndarray:
+  """0, 1, 2, 3 for the rays of each band, in ray order."""
+  rank = np.zeros(len(band), np.int64)
+  for k in np.unique(band):
+    idx = np.nonzero(band == k)[0]
+    rank[idx] = np.arange(len(idx))
+  return rank

@@ -2,7 +2,7 @@
 
 import pytest
 
-from mjx_tracks.envs.config import ConfigError, available_tasks, load_config
+from mjx_tracks.envs.config import ConfigError, available_tasks, default_config, from_dict, load_config
 
 PAPER_TASKS = {"asc-inc-cog", "asc-uni-cog", "des-inc-ang", "des-uni-ang"}
 
@@ -47,3 +47,31 @@ def test_bad_values_fail_naming_the_key(override, message):
 def test_unknown_task_lists_the_known_ones():
   with pytest.raises(ConfigError, match="unknown task 'flying'.*asc-inc-cog"):
     load_config("flying")
+
+
+def test_defaults_file_is_not_a_task_and_holds_every_key():
+  assert "defaults" not in available_tasks()
+  with pytest.raises(ConfigError, match="unknown task 'defaults'"):
+    load_config("defaults")
+  cfg = default_config()  # every dataclass field must have its default there, or this fails
+  assert cfg.scene.variant == "difficulty" and cfg.observation.parts == load_config("asc-inc-cog").observation.parts
+
+
+def test_a_run_config_missing_a_key_names_it():
+  raw = load_config("asc-inc-cog").to_dict()
+  del raw["physics"]["impratio"]
+  with pytest.raises(ConfigError, match=r"physics: missing keys \['impratio'\]"):
+    from_dict(raw)
+
+
+def test_renamed_curriculum_variants_say_their_new_names():
+  with pytest.raises(ConfigError, match="'original' is now 'original_code'"):
+    load_config("asc-inc-cog", ["scene.variant=original"])
+
+
+def test_hardest_scene_pins_every_parameter_at_its_hard_end():
+  from train.evaluate import scene_config
+  s = scene_config(load_config("asc-inc-cog", ["scene.tread=[0.4, 0.5]"]), "hardest").scene
+  assert (s.tread, s.riser, s.steps, s.sampler) == ((0.4, 0.4), (0.22, 0.22), (7, 7), "uniform")
+  with pytest.raises(ConfigError, match="stair tasks only"):
+    scene_config(load_config("nav"), "hardest")

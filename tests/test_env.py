@@ -76,8 +76,92 @@ def test_finished_episodes_restart_on_a_new_scene():
   after = np.asarray(s.pipeline_state.scene.xi)
   assert not np.allclose(before, after)
   assert np.asarray(s.info["global"].curriculum.finished)[0] == N_ENVS
-  np.testing.assert_allclose(np.asarray(s.pipeline_state.data.qpos[:, 2]), core.robot.spawn_height + 0.005,
-                             atol=1e-5)  # back at the spawn, upright
+  spawn = np.asarray(s.pipeline_state.scene.spawn_pos)
+  np.testing.assert_allclose(np.asarray(s.pipeline_state.data.qpos[:, :2]), spawn[:, :2], atol=1e-6)
+  np.testing.assert_allclose(np.asarray(s.pipeline_state.data.qpos[:, 3:7]),
+                             np.tile([1.0, 0, 0, 0], (N_ENVS, 1)), atol=1e-6)  # back at the spawn, upright
+
+
+def test_unfinished_environments_are_untouched_by_the_auto_reset():
+  """Env 0 tips over and is reset; env 1 ends in exactly the state it reaches when env 0 does not."""
+  core, env, reset, step = _compiled("asc-inc-cog")
+  s = reset(jax.random.split(jax.random.PRNGKey(2), N_ENVS))
+  keep = lambda a, b: jnp.concatenate([a[:1], b[1:]])  # env 0 tipped, env 1 as it was
+  mixed = s.replace(pipeline_state=jax.tree_util.tree_map(keep, _upside_down(s).pipeline_state, s.pipeline_state))
+  action = jnp.full((N_ENVS, core.action_size), 0.3)
+  after, reference = step(mixed, action), step(s, action)
+  assert np.asarray(after.done).tolist() == [1.0, 0.0] and not np.asarray(reference.done).any()
+  for a, b in zip(jax.tree_util.tree_leaves(after.pipeline_state), jax.tree_util.tree_leaves(reference.pipeline_state)):
+    np.testing.assert_array_equal(np.asarray(a)[1], np.asarray(b)[1])
+  np.testing.assert_array_equal(np.asarray(after.obs)[1], np.asarray(reference.obs)[1])
+  spawn = np.asarray(after.pipeline_state.scene.spawn_pos)[0]
+  np.testing.assert_allclose(np.asarray(after.pipeline_state.data.qpos)[0, :2], spawn[:2], atol=1e-6)
+  np.testing.assert_allclose(np.asarray(after.pipeline_state.data.qpos)[0, 3:7], [1, 0, 0, 0], atol=1e-6)
+
+
+def test_a_physics_blow_up_ends_the_episode_and_is_counted():
+  """Velocities of 1e30 m/s make the integration overflow: the step keeps the last finite state,
+  ends the episode and counts it in physics_nan, with finite observations and rewards."""
+  core, _, reset, step = _compiled("asc-inc-cog")
+  s = reset(jax.random.split(jax.random.PRNGKey(3), N_ENVS))
+  es = s.pipeline_state
+  s = s.replace(pipeline_state=es.replace(data=es.data.replace(qvel=jnp.full_like(es.data.qvel, 1e30))))
+  s = step(s, jnp.zeros((N_ENVS, core.action_size)))
+  assert np.asarray(s.metrics["physics_nan"]).tolist() == [1.0] * N_ENVS
+  assert np.asarray(s.done).all() and not np.asarray(s.info["truncation"]).any()
+  assert np.isfinite(np.asarray(s.info["final_obs"])).all() and np.isfinite(np.asarray(s.reward)).all()
+  assert int(np.asarray(s.info["global"].curriculum.finished)[0]) == N_ENVS
+
+
+def test_navigation_ends_at_the_goal_and_when_moving_away():
+  """Env 0 is put on its goal; env 1's start distance is shrunk to 0.5 m, so where it stands it is
+  more than 1.2 start distances from the goal."""
+  core, _, reset, step = _compiled("nav")
+  s = reset(jax.random.split(jax.random.PRNGKey(4), N_ENVS))
+  es = s.pipeline_state
+  goal = np.asarray(es.scene.goal)
+  q = es.data.qpos.at[0, :2].set(goal[0, :2])
+  es = es.replace(data=es.data.replace(qpos=q), d0=es.d0.at[1].set(0.5), closest=es.closest.at[1].set(0.5))
+  s = step(s.replace(pipeline_state=es), jnp.zeros((N_ENVS, core.action_size)))
+  assert np.asarray(s.done).tolist() == [1.0, 1.0]
+  assert np.asarray(s.metrics["goal_reached"]).tolist() == [1.0, 0.0]
+  assert np.asarray(s.metrics["moved_away"]).tolist() == [0.0, 1.0]
+  assert not np.asarray(s.metrics["tipped_over"]).any()
+
+
+def test_the_spawn_is_off_the_stairs_and_the_cog_term_waits_for_them():
+  core, _, reset, step = _compiled("asc-inc-cog")
+  s = step(reset(jax.random.split(jax.random.PRNGKey(5), N_ENVS)), jnp.zeros((N_ENVS, core.action_size)))
+  assert np.asarray(s.metrics["on_stairs"]).tolist() == [0.0] * N_ENVS  # spawned 1 m before the first riser
+  assert np.asarray(s.metrics["cog_deviation"]).tolist() == [0.0] * N_ENVS
+
+
+def test_observation_parts_read_their_sources():
+  """Each part of the paper's stair observation against where it comes from."""
+  from mjx_tracks.envs.beams import depth_beams
+  from mjx_tracks.sim.pose import chassis_rpy
+  core, _, reset, step = _compiled("asc-inc-cog")
+  s = reset(jax.random.split(jax.random.PRNGKey(6), N_ENVS))
+  s = step(s, jnp.tile(jnp.array([1.0, 0.6, -0.4, 0.5, -0.5]), (N_ENVS, 1)))
+  obs, es = np.asarray(s.obs[0]), jax.tree_util.tree_map(lambda x: x[0], s.pipeline_state)
+  sizes = core.part_sizes
+  offsets = np.cumsum([0] + [sizes[p] for p in core.cfg.observation.parts])
+  part = {p: obs[offsets[i]:offsets[i + 1]] for i, p in enumerate(core.cfg.observation.parts)}
+  q = np.asarray(es.data.qpos)
+  joints = q[core.sim.layout.joint_qpos]
+  names = core.robot.joint_names()
+  front = [names.index("flipper_front_left"), names.index("flipper_front_right")]
+  rear = [names.index("flipper_rear_left"), names.index("flipper_rear_right")]
+  np.testing.assert_allclose(part["flippers_paired"], [joints[front].mean(), joints[rear].mean()], atol=1e-6)
+  np.testing.assert_allclose(part["arm"], joints[[names.index("arm_1"), names.index("arm_2")]], atol=1e-6)
+  np.testing.assert_allclose(part["pitch"], np.asarray(chassis_rpy(jnp.asarray(q)))[1], atol=1e-6)
+  rot = np.asarray(es.data.xmat[core.sim.layout.chassis_body])
+  np.testing.assert_allclose(part["v"], (rot.T @ np.asarray(es.data.qvel[:3]))[0], atol=1e-5)
+  assert part["v"][0] > 0.1  # driving forward
+  m = core.sim.with_boxes(es.scene.box_pos, es.scene.box_size)
+  beams = np.asarray(depth_beams(core.beams, m, es.data, core.sim.layout.camera_site))
+  np.testing.assert_allclose(part["vertical_beams"], beams[: core.cfg.observation.vertical_beams], atol=1e-5)
+  assert (part["vertical_beams"] > 0).any()  # the camera sees the floor and the first step
 
 
 def test_gymnasium_checker_passes_and_vector_env_steps():
@@ -87,10 +171,35 @@ def test_gymnasium_checker_passes_and_vector_env_steps():
   frame = env.render()
   assert frame.ndim == 3 and frame.shape[2] == 3 and frame.std() > 0
   venv = gym.make_vec("mjx_tracks/asc-inc-cog-v0", num_envs=3)
-  obs, _ = venv.reset(seed=0)
-  assert obs.shape == (3, venv.single_observation_space.shape[0])
+  obs, info = venv.reset(seed=0)
+  assert obs.shape == (3, venv.single_observation_space.shape[0]) and info["eps"].shape == (3,)
   obs, rew, term, trunc, info = venv.step(venv.action_space.sample())
-  assert obs.dtype == np.float32 and rew.shape == (3,) and "final_obs" in info
+  assert obs.dtype == np.float32 and rew.shape == (3,) and "final_obs" in info and "eps" in info
+
+
+def test_gymnasium_env_keeps_its_curriculum_across_resets():
+  """A forward-driving policy for 40 episodes of one Env: the eps reported at reset rises above 0
+  and, with the window's missing episodes counted as 0, stays below 1 early on."""
+  env = gym.make("mjx_tracks/asc-inc-cog-v0").unwrapped
+  forward = np.array([1.0, 0.3, 0.0, 0.0, 0.0], np.float32)
+  eps_at_reset = []
+  _, info = env.reset(seed=0)
+  for _ in range(40):
+    eps_at_reset.append(info["eps"])
+    done = False
+    while not done:
+      _, _, term, trunc, step_info = env.step(forward)
+      assert "eps" in step_info
+      done = term or trunc
+    _, info = env.reset()
+  window = env._stack.core.cfg.scene.curriculum.window
+  assert eps_at_reset[0] == 0.0 and max(eps_at_reset) > 0.0
+  assert all(e <= (i / window) + 1e-6 for i, e in enumerate(eps_at_reset[:window]))  # < 1 early on
+  kept = env.curriculum_state()
+  assert int(kept.curriculum.finished) == 40
+  fresh = gym.make("mjx_tracks/asc-inc-cog-v0").unwrapped
+  fresh.set_curriculum_state(kept)
+  assert fresh.reset(seed=1)[1]["eps"] == pytest.approx(float(kept.curriculum.eps))
 
 
 def test_bad_task_settings_fail_clearly():

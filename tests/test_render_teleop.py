@@ -4,6 +4,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from mjx_tracks.robots import get_robot
 from mjx_tracks.sim.control import INCREMENT
 from mjx_tracks.tools.render import render_depth
 from mjx_tracks.tools.teleop import apply_key
@@ -32,16 +33,22 @@ def test_depth_image_centre_matches_a_ray_along_the_camera_axis(jaguar_stairs):
 
 
 def test_keys_drive_speeds_and_clip_joint_targets():
-  limits = np.array([[-0.78, 0.78]] * 4 + [[-1.3, 1.3], [-2.9, 2.9]])
-  v, w, t, quit_ = apply_key("w", 0.0, 0.0, np.zeros(6), limits, 1.0)
+  robot = get_robot(1)
+  lim = robot.flipper_limit
+  v, w, t, quit_ = apply_key("w", 0.0, 0.0, np.zeros(6), robot)
   assert (v, w, quit_) == (pytest.approx(0.1), 0.0, False)
-  v, w, t, _ = apply_key("a", v, w, t, limits, 1.0)
+  v, w, t, _ = apply_key("a", v, w, t, robot)
   assert w == pytest.approx(0.2)
   for _ in range(20):
-    v, w, t, _ = apply_key("i", v, w, t, limits, 1.0)
-  np.testing.assert_allclose(t[:2], 0.78)  # front pair raised, clipped at the limit
-  v, w, t, _ = apply_key("o", v, w, t, limits, 1.0)
-  np.testing.assert_allclose(t[2:4], INCREMENT / 2)
-  v, w, _, _ = apply_key(" ", v, w, t, limits, 1.0)
+    v, w, t, _ = apply_key("i", v, w, t, robot)
+  np.testing.assert_allclose(t[robot.joint_index("front")], lim)  # front pair raised, clipped at the limit
+  np.testing.assert_allclose(t[robot.joint_index("rear")], 0.0)
+  v, w, t, _ = apply_key("o", v, w, t, robot)
+  np.testing.assert_allclose(t[robot.joint_index("rear")], INCREMENT / 2)
+  v, w, t, _ = apply_key("y", v, w, t, robot)
+  np.testing.assert_allclose(t[robot.joint_index("arm_2")], INCREMENT / 2)
+  v, w, _, _ = apply_key(" ", v, w, t, robot)
   assert (v, w) == (0.0, 0.0)
-  assert apply_key("q", v, w, t, limits, 1.0)[3]
+  assert apply_key("q", v, w, t, robot)[3]
+  t2 = apply_key("u", 0.0, 0.0, np.zeros(4), get_robot(2))[2]  # no arm: arm keys change nothing
+  np.testing.assert_array_equal(t2, 0.0)

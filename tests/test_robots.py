@@ -1,10 +1,11 @@
 """Robot models built from their constants: masses, limits, collision filtering, sensor sites."""
 
+import dataclasses
+
 import mujoco
 import numpy as np
 import pytest
 
-from mjx_tracks.sim.physics import PhysicsConfig
 from mjx_tracks.robots import get_robot
 from scenes.world import ROBOT_CONTYPE
 
@@ -32,19 +33,26 @@ def test_robot_parts_never_collide_with_each_other(jaguar_stairs):
   assert (m.geom_contype[robot] & ROBOT_CONTYPE).any()
 
 
-def test_sensor_sites_where_the_reference_puts_them(jaguar_stairs):
-  m = jaguar_stairs.mj_model
-  np.testing.assert_allclose(m.site_pos[jaguar_stairs.layout.camera_site], (0.195, 0.1, 0.295))
+def test_camera_axis_meets_the_floor_where_its_height_and_pitch_say(jaguar_stairs):
+  """A ray along the depth camera's axis (mj_ray) hits the floor at z_cam / sin(pitch), and the
+  rendering camera coincides with the site the beams are cast from."""
+  m, lay = jaguar_stairs.mj_model, jaguar_stairs.layout
   d = mujoco.MjData(m)
   mujoco.mj_forward(m, d)
-  forward = -d.site_xmat[jaguar_stairs.layout.camera_site].reshape(3, 3)[:, 2]  # camera looks along -z
-  assert np.degrees(np.arcsin(-forward[2])) == pytest.approx(np.degrees(0.46), abs=0.1)
-  assert forward[0] > 0.8
+  site_rot = d.site_xmat[lay.camera_site].reshape(3, 3)
+  axis = -site_rot[:, 2]  # cameras look along -z
+  origin = d.site_xpos[lay.camera_site]
+  dist = mujoco.mj_ray(m, d, origin, axis, np.array([1, 0, 0, 0, 0, 0], np.uint8), 1, -1, np.zeros(1, np.int32))
+  pitch = jaguar_stairs.robot.camera_pitch
+  assert dist == pytest.approx(origin[2] / np.sin(pitch), rel=1e-3)
+  cam = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, "depth_camera")
+  np.testing.assert_allclose(d.cam_xpos[cam], origin, atol=1e-9)
+  np.testing.assert_allclose(d.cam_xmat[cam].reshape(3, 3), site_rot, atol=1e-9)
 
 
-def test_bad_physics_config_fails_clearly():
+def test_bad_physics_config_fails_clearly(default_physics):
   from mjx_tracks.sim.physics import compile_model
   with pytest.raises(ValueError, match="timestep"):
-    compile_model(get_robot(1), "", PhysicsConfig(timestep=0.5))
+    compile_model(get_robot(1), "", dataclasses.replace(default_physics, timestep=0.5))
   with pytest.raises(KeyError, match="unknown robot"):
     get_robot(3)

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from mjx_tracks.envs.config import default_config
 from mjx_tracks.sim.control import Controller
 from mjx_tracks.tools.drive import DriveSetup, scripted_rollout, summarize
 from mjx_tracks.sim.pose import chassis_rpy
@@ -19,7 +20,8 @@ SEVEN_STEPS = sc.Staircase(jnp.float32(0.30), jnp.float32(0.17), jnp.int32(7))
 @pytest.mark.parametrize("direction", ["up", "down"])
 def test_scripted_controller_negotiates_seven_steps(robot_fixture, direction, request):
   sim = request.getfixturevalue(robot_fixture)
-  setup = DriveSetup(sim, SEVEN_STEPS, direction, control_period=0.1)
+  setup = DriveSetup(sim, SEVEN_STEPS, direction, control_period=0.1,
+                     goal_tolerance=default_config().episode.goal_tolerance)
   qpos = scripted_rollout(setup, n_steps=150)  # 15 s
   s = summarize(setup, qpos)
   assert not s["tipped_over"]

@@ -10,6 +10,7 @@ import pytest
 from mjx_tracks.sim.control import command_belt_speeds
 from mjx_tracks.sim.pose import chassis_rpy
 from mjx_tracks.robots import get_robot
+from mjx_tracks.sim import mjx_private
 from mjx_tracks.sim.simulator import Simulator
 from scenes.world import world_geom_attrs
 from scenes import staircase as sc
@@ -69,7 +70,7 @@ def test_belt_bottom_moves_backward_and_front_end_down(flat):
   from mujoco import mjx
   d = mjx.forward(m, d)
   on_belt, _, u_dir, _ = contact_belt_velocity(m, d, sim.tracks, jnp.ones(6))
-  c = d._impl.contact
+  c = mjx_private.contacts(d)
   touching = np.asarray(on_belt & (c.dist < 0))
   assert touching.sum() >= 4  # both side tracks rest on the floor at both ends
   np.testing.assert_allclose(np.asarray(u_dir)[touching], np.tile([-1.0, 0, 0], (touching.sum(), 1)),
@@ -82,9 +83,9 @@ def _incline_world(angle: float) -> str:
           f'{world_geom_attrs()}/>')
 
 
-def test_zero_command_holds_on_20_degree_incline():
+def test_zero_command_holds_on_20_degree_incline(default_physics):
   angle = math.radians(20)
-  sim = Simulator.create(get_robot(1), _incline_world(angle))
+  sim = Simulator.create(get_robot(1), _incline_world(angle), default_physics)
   nj = sim.layout.n_joints
   d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(nj))
   normal = jnp.array([-math.sin(angle), 0.0, math.cos(angle)])

@@ -19,7 +19,7 @@ import sys
 import numpy as np
 
 from mjx_tracks.envs.config import ConfigError, TaskConfig, from_dict
-from scenes.staircase import stair_ranges
+from scenes.staircase import STAIR_HARD, STAIR_PARAMS
 
 SCENES = ("hardest", "uniform", "incremental", "train")
 
@@ -29,10 +29,9 @@ def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
   if scene == "hardest":
     if s.kind != "stairs":
       raise ConfigError("scene 'hardest' exists for stair tasks only")
-    hard = stair_ranges(s.tread, s.riser, s.steps).hardest  # each parameter at its hard end
-    pin = lambda v, integer=False: (int(round(v)),) * 2 if integer else (float(v),) * 2
-    s = dataclasses.replace(s, sampler="uniform", tread=pin(hard[0]), riser=pin(hard[1]),
-                            steps=pin(hard[2], True))
+    pinned = {name: (getattr(s, name)[end == "high"],) * 2  # each parameter at its hard end
+              for name, end in zip(STAIR_PARAMS, STAIR_HARD)}
+    s = dataclasses.replace(s, sampler="uniform", **pinned)
   elif scene == "uniform":
     s = dataclasses.replace(s, sampler="uniform")
   elif scene == "incremental":
@@ -97,7 +96,9 @@ def main(argv: list[str] | None = None) -> int:
     return 2
   import jax  # noqa: PLC0415
 
+  from mjx_tracks import compile_cache  # noqa: PLC0415
   from train.policy import load_policy, load_policy_info  # noqa: PLC0415
+  compile_cache.enable()
   with open(run_json) as f:
     meta = json.load(f)
   try:

@@ -268,6 +268,8 @@ def main(argv: list[str] | None = None) -> int:
   except (RunError, ConfigError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
+  from mjx_tracks import compile_cache  # noqa: PLC0415
+  compile_cache.enable()
   _write_run_json(plan)
   db = ExperimentDB(args.db or default_path(os.path.dirname(plan.out_dir)))
   db.start(plan.run_id, plan.task, plan.algo, plan.preset_name, plan.seed, plan.cfg.to_dict(),

@@ -4,8 +4,8 @@ import math
 
 from mjx_tracks.robots.spec import ArmSpec, CapsuleSegment, RobotSpec, four_flippers
 
-# Flipper belt: roller r = 0.09 m at the pivot tapering to r = 0.035 m at the tip, 0.23 m out
-# (REFERENCE.md). Approximated by two capsules whose union follows the taper.
+# Flipper belt: roller r = 0.09 m at the pivot tapering to r = 0.035 m at the tip, 0.23 m out (the
+# original framework's robot description, Mitriakov et al. 2022). Two capsules follow the taper.
 _FLIPPER_SEGMENTS = (
     CapsuleSegment(start=0.0, end=0.11, radius=0.075),
     CapsuleSegment(start=0.11, end=0.23, radius=0.045),

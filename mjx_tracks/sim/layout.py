@@ -27,10 +27,7 @@ class Layout:
   joint_names: tuple[str, ...]
   geom_belt: np.ndarray  # (ngeom,) belt index of each geom (order of BELTS), -1 if none
   scene_boxes: np.ndarray  # (n_boxes,) geom ids of the per-environment boxes, in name order
-  world_geoms: np.ndarray  # geoms of the world body (what depth beams see)
   camera_site: int
-  imu_site: int
-  n_flippers: int
 
   @property
   def n_joints(self) -> int:
@@ -68,8 +65,5 @@ def resolve_layout(m: mujoco.MjModel, robot: RobotSpec) -> Layout:
       joint_names=names,
       geom_belt=geom_belt,
       scene_boxes=np.array([g for _, g in sorted(steps)], np.int32),
-      world_geoms=np.nonzero(m.geom_bodyid == 0)[0].astype(np.int32),
       camera_site=gid(mujoco.mjtObj.mjOBJ_SITE, "depth_camera"),
-      imu_site=gid(mujoco.mjtObj.mjOBJ_SITE, "imu"),
-      n_flippers=len(robot.flippers),
   )

@@ -140,6 +140,8 @@ def main(argv: list[str] | None = None) -> int:
     raise SystemExit(f"error: {e.args[0]}")
   if not 0 < args.seconds <= 600:
     raise SystemExit("error: --seconds must be in (0, 600]")
+  from mjx_tracks import compile_cache  # noqa: PLC0415
+  compile_cache.enable()
   defaults = default_config()
   setup = DriveSetup(staircase_simulator(robot, defaults.physics), parse_stairs(args.stairs), args.direction,
                      args.control_period, defaults.episode.goal_tolerance)

@@ -4,26 +4,35 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mjx_tracks.envs.config import EpisodeConfig, RewardConfig
-from mjx_tracks.envs.rewards import (Monitor, cog_deviation, goal_distance, normalizer_init,
-                                normalizer_update, progress_step)
+import dataclasses
+
+from mjx_tracks.envs.config import default_config
+from mjx_tracks.envs.rewards import (ON_STAIRS_MARGIN, Monitor, cog_deviation, goal_distance, goal_reached,
+                                     normalizer_init, normalizer_update, on_stairs, progress_step)
+
+_D = default_config()
+EP = _D.episode
+
+
+def RewardConfig(**kw):
+  return dataclasses.replace(_D.reward, **kw)
 
 
 def test_moving_half_a_metre_toward_a_goal_two_metres_away_earns_a_quarter():
   goal = jnp.array([2.3, 0.0, 0.0])
-  d0 = goal_distance(jnp.zeros(3), goal, 0.3)
+  d0 = goal_distance(jnp.zeros(3), goal, 0.0, 0.3)
   assert float(d0) == pytest.approx(2.0)
-  dist = goal_distance(jnp.array([0.5, 0, 0]), goal, 0.3)
+  dist = goal_distance(jnp.array([0.5, 0, 0]), goal, 0.0, 0.3)
   r, closest = progress_step(dist, d0, d0)
   assert float(r) == pytest.approx(0.25) and float(closest) == pytest.approx(1.5)
   # moving back and forth earns nothing until the closest distance is beaten again
-  back = goal_distance(jnp.array([0.2, 0, 0]), goal, 0.3)
+  back = goal_distance(jnp.array([0.2, 0, 0]), goal, 0.0, 0.3)
   r2, closest2 = progress_step(back, closest, d0)
   assert float(r2) == 0.0 and float(closest2) == pytest.approx(1.5)
-  r3, closest3 = progress_step(goal_distance(jnp.array([1.0, 0, 0]), goal, 0.3), closest2, d0)
+  r3, closest3 = progress_step(goal_distance(jnp.array([1.0, 0, 0]), goal, 0.0, 0.3), closest2, d0)
   assert float(r3) == pytest.approx(0.25)
   # overshooting the goal completes the episode's progress at exactly 1 in total
-  r4, _ = progress_step(goal_distance(jnp.array([2.2, 0, 0]), goal, 0.3), closest3, d0)
+  r4, _ = progress_step(goal_distance(jnp.array([2.2, 0, 0]), goal, 0.0, 0.3), closest3, d0)
   assert float(r + r3 + r4) == pytest.approx(1.0)
 
 
@@ -40,17 +49,17 @@ def test_cog_deviation_hand_cases():
 
 
 def test_reward_functions_and_termination():
-  ep = EpisodeConfig()
+  ep = EP
   window = jnp.array([0.1, 0.2, 0.3, 0.0, 0.4])
   upright = jnp.zeros(3)
   for kind, expected in (("free", 0.0), ("cog", -0.05 * 0.2), ("angular", -0.05 * 0.2)):
-    mon = Monitor(RewardConfig(kind=kind), ep)
+    mon = Monitor(RewardConfig(kind=kind, cog_scale=0.05, angular_scale=0.05), ep)
     terms, prog, _, term, _ = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
                                            upright, window, jnp.float32(1.0))
     assert float(terms["progress"]) == pytest.approx(0.25)
     assert float(terms["safety"]) == pytest.approx(expected)
     assert not bool(term)
-  mon = Monitor(RewardConfig(kind="cog"), ep)
+  mon = Monitor(RewardConfig(kind="cog", cog_scale=0.05), ep)
   _, _, _, term, flags = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
                                       jnp.array([0.0, 1.7, 0.0]), window, jnp.float32(1.0))
   assert bool(term) and bool(flags["tipped"])
@@ -72,4 +81,24 @@ def test_penalty_normalization_uses_the_first_episodes():
   assert float(s.k) == pytest.approx(3 / 1.2)  # 1 / mean(0.2, 0.4, 0.6); later episodes ignored
   s2 = normalizer_update(cfg, s, jnp.array([True]), jnp.array([50.0]))
   assert float(s2.k) == pytest.approx(float(s.k))
-  assert float(normalizer_init(RewardConfig()).k) == 1.0
+  assert float(normalizer_init(RewardConfig(normalize_penalties=False)).k) == 1.0
+
+
+def test_goal_line_ignores_lateral_offset_within_its_halfwidth():
+  goal = jnp.array([3.0, 0.0, 1.0])
+  # 0.58 m to the side of a point goal is 0.28 m outside the tolerance; on a 1 m half-width line it is at the goal
+  assert float(goal_distance(jnp.array([3.0, -0.58, 1.0]), goal, 0.0, 0.3)) == pytest.approx(0.28, abs=1e-6)
+  assert bool(goal_reached(goal_distance(jnp.array([3.0, -0.58, 1.0]), goal, 1.0, 0.3)))
+  # beyond the line's end the distance is measured from the end point
+  d = goal_distance(jnp.array([3.0, 1.4, 1.0]), goal, 1.0, 0.3)
+  assert float(d) == pytest.approx(0.1, abs=1e-6) and not bool(goal_reached(d))
+  # along x the line is as far as the point
+  assert float(goal_distance(jnp.array([2.0, 0.5, 1.0]), goal, 1.0, 0.3)) == pytest.approx(0.7, abs=1e-6)
+
+
+def test_on_stairs_window_spans_the_staircase_plus_the_margin():
+  top = jnp.float32(2.1)
+  m = ON_STAIRS_MARGIN
+  inside = jnp.array([-m + 0.01, 0.0, 1.0, 2.1 + m - 0.01])
+  outside = jnp.array([-m - 0.01, -1.0, 2.1 + m + 0.01, 5.0])
+  assert bool(jnp.all(on_stairs(inside, top))) and not bool(jnp.any(on_stairs(outside, top)))

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Builds the wheel, installs it (no dependencies: they are already installed) into a folder outside
+# the repository, and loads a task from there: the configs must ship as package data.
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/.." && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+python3 -m pip wheel -q --no-deps -w "$tmp/dist" "$repo"
+python3 -m pip install -q --no-deps --target "$tmp/site" "$tmp"/dist/*.whl
+cd "$tmp"
+PYTHONPATH="$tmp/site" JAX_PLATFORMS=cpu python3 - "$tmp/site" <<'PY'
+import sys
+import mjx_tracks
+from mjx_tracks.envs.config import available_tasks, load_config
+assert mjx_tracks.__file__.startswith(sys.argv[1]), f"imported {mjx_tracks.__file__}, not the wheel"
+tasks = available_tasks()
+assert "asc-inc-cog" in tasks, tasks
+cfg = load_config("asc-inc-cog")
+print(f"wheel: {len(tasks)} tasks load from {sys.argv[1]} (asc-inc-cog: {cfg.scene.variant} curriculum)")
+PY
