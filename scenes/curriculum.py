@@ -35,9 +35,9 @@ class CurriculumState:
 class Curriculum:
   """Static settings: window N_e, rule, starting eps."""
 
-  window: int = 20  # N_e
-  rule: str = "progress"
-  eps0: float = 0.0
+  window: int  # N_e
+  rule: str  # RULES
+  eps0: float = 0.0  # eps before the first finished episode
 
   def __post_init__(self):
     if self.rule not in RULES:

@@ -45,11 +45,11 @@ def _lerp(a, b, u):
 class NavScene:
   """Hallway / zigzag navigation area."""
 
-  sampler: str = "uniform"
-  variant: str = "difficulty"
-  kinds: tuple[str, ...] = ("hallway", "zigzag")  # drawn with equal probability
-  random_spawn: bool = False
-  random_goal: bool = False
+  sampler: str  # scenes.samplers.SAMPLERS
+  variant: str  # incremental variant (scenes.samplers.VARIANTS)
+  kinds: tuple[str, ...]  # of ("hallway", "zigzag"), drawn with equal probability
+  random_spawn: bool
+  random_goal: bool
 
   def __post_init__(self):
     if not self.kinds or any(k not in ("hallway", "zigzag") for k in self.kinds):

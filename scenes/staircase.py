@@ -125,12 +125,12 @@ SPAWN_YAW = jnp.pi / 2  # rad, random spawn yaw offset ~ U(-pi/2, pi/2)
 class StairScene:
   """Ascent or descent of a randomized straight staircase."""
 
-  direction: str = "up"  # "up" | "down"
-  sampler: str = "incremental"  # "uniform" | "incremental"
-  variant: str = "difficulty"  # incremental variant (scenes.samplers.VARIANTS)
-  ranges: Ranges = stair_ranges((0.35, 0.52), (0.12, 0.22), (1, 7))
-  random_spawn: bool = False
-  random_goal: bool = False
+  direction: str  # "up" | "down"
+  sampler: str  # scenes.samplers.SAMPLERS
+  variant: str  # incremental variant (scenes.samplers.VARIANTS)
+  ranges: Ranges  # of xi = (tread, riser, steps): stair_ranges(...)
+  random_spawn: bool
+  random_goal: bool
 
   def __post_init__(self):
     if self.direction not in ("up", "down"):

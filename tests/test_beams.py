@@ -1,5 +1,7 @@
 """Depth beams: MJX ray casting against mujoco.mj_ray on the CPU for random robot poses."""
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import mujoco
@@ -7,10 +9,16 @@ import numpy as np
 import pytest
 
 from mjx_tracks.envs.beams import BeamLayout, cast
+from mjx_tracks.envs.config import default_config
+from mjx_tracks.envs.task_env import make_scene
 from mjx_tracks.sim.simulator import Simulator
-from scenes.staircase import StairScene
 
 LAYOUT = BeamLayout.create(1.2, (640, 480), 60, 12, 10, (2, 2), (0.2, 1.5), 8.0)
+
+
+def _stairs(**kw):
+  """The default staircase scene, sampled uniformly, with scene-section overrides."""
+  return make_scene(dataclasses.replace(default_config().scene, sampler="uniform", **kw))
 
 
 def _random_pose(rng):
@@ -24,7 +32,7 @@ def _random_pose(rng):
 
 def test_beam_rays_match_mj_ray_for_random_poses(jaguar_stairs):
   sim: Simulator = jaguar_stairs
-  scene = StairScene(sampler="uniform")
+  scene = _stairs()
   rng = np.random.default_rng(0)
 
   @jax.jit

@@ -88,6 +88,6 @@ def test_split_across_devices_equals_one_device():
 
 def test_bad_settings_fail_clearly():
   with pytest.raises(ValueError, match="rule"):
-    Curriculum(rule="median")
+    Curriculum(window=20, rule="median")
   with pytest.raises(ValueError, match="window"):
-    Curriculum(window=0)
+    Curriculum(window=0, rule="progress")

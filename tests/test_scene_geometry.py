@@ -1,5 +1,7 @@
 """Batched staircase geometry against a MuJoCo C model built directly from xi; rays; distinct scenes."""
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import mujoco
@@ -7,8 +9,15 @@ import numpy as np
 import pytest
 from mujoco import mjx
 
-from scenes.navigation import AREA_W, NavScene
-from scenes.staircase import LANDING_LENGTH, StairScene
+from mjx_tracks.envs.config import default_config, load_config
+from mjx_tracks.envs.task_env import make_scene
+from scenes.navigation import AREA_W
+from scenes.staircase import LANDING_LENGTH
+
+
+def _stairs(**kw):
+  """The default staircase scene, sampled uniformly, with scene-section overrides."""
+  return make_scene(dataclasses.replace(default_config().scene, sampler="uniform", **kw))
 
 
 def _c_model_from_xi(l: float, h: float, n: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
@@ -28,7 +37,7 @@ def _c_model_from_xi(l: float, h: float, n: int) -> tuple[mujoco.MjModel, mujoco
 def batch(jaguar_stairs):
   """32 uniform staircases placed into the compiled model, after MJX kinematics."""
   sim = jaguar_stairs
-  scene = StairScene(sampler="uniform")
+  scene = _stairs()
   keys = jax.random.split(jax.random.PRNGKey(7), 32)
 
   def one(key):
@@ -68,15 +77,15 @@ def test_ray_straight_down_over_each_tread_hits_its_height(batch):
 
 
 def test_one_key_resets_256_distinct_staircases():
-  scene = StairScene(sampler="uniform")
+  scene = _stairs()
   s = jax.jit(jax.vmap(scene.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(0), 256), 0.0)
   xi = np.asarray(s.xi)
   assert len({tuple(row) for row in xi.round(6)}) == 256
 
 
 def test_spawn_and_goal_follow_the_geometry():
-  up = StairScene(direction="up", sampler="uniform")
-  down = StairScene(direction="down", sampler="uniform")
+  up = _stairs(direction="up")
+  down = _stairs(direction="down")
   key = jax.random.PRNGKey(3)
   su, sd = up.sample(key, 0.0), down.sample(key, 0.0)
   l, h, n = (float(x) for x in su.xi)
@@ -88,7 +97,7 @@ def test_spawn_and_goal_follow_the_geometry():
 
 
 def test_random_spawn_stays_in_its_area():
-  scene = StairScene(sampler="uniform", random_spawn=True, random_goal=True)
+  scene = _stairs(random_spawn=True, random_goal=True)
   s = jax.vmap(scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(1), 2000), 0.0)
   y, yaw = np.asarray(s.spawn_pos[:, 1]), np.asarray(s.spawn_yaw)
   assert np.abs(y).max() <= 0.75 and np.abs(y).max() > 0.7
@@ -96,7 +105,7 @@ def test_random_spawn_stays_in_its_area():
 
 
 def test_navigation_kinds_are_equally_likely_and_leave_a_gap():
-  scene = NavScene(random_spawn=True, random_goal=True)
+  scene = make_scene(dataclasses.replace(load_config("nav").scene, random_spawn=True, random_goal=True))
   s = jax.jit(jax.vmap(scene.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(2), 4000), 0.0)
   kind = np.asarray(s.variant)
   assert abs(kind.mean() - 0.5) < 0.03

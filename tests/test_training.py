@@ -1,5 +1,5 @@
-"""Training end to end on the CPU: tiny PPO and SAC runs, resume, export -> load -> act,
-evaluation report, experiment database, bad input."""
+"""Training end to end on the CPU: a tiny PPO run, resume, export -> load -> act, evaluation
+report, experiment database, bad input (SAC: test_training_sac.py)."""
 
 import glob
 import json
@@ -11,12 +11,10 @@ import jax
 import numpy as np
 import pytest
 
+from helpers import TINY, run_id
 from train import db as dbmod
 from train import evaluate, run
 from train.checkpoints import RunCheckpoints
-
-# a small task variant: no beams, short episodes (compiles and runs quickly on a CPU)
-TINY = ["--set", "observation.parts=[v, flippers_paired, arm, pitch]", "--set", "episode.max_steps=8"]
 
 
 @pytest.fixture(scope="module")
@@ -29,11 +27,6 @@ def ppo_run(tmp_path_factory):
   return out, database
 
 
-def _run_id(out):
-  with open(os.path.join(out, "run.json")) as f:
-    return json.load(f)["run_id"]
-
-
 def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):
   out, database = ppo_run
   steps = RunCheckpoints(out).mgr.all_steps()
@@ -41,7 +34,7 @@ def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):
   assert os.path.exists(os.path.join(out, "policy", "policy.json"))
   assert glob.glob(os.path.join(out, "tb", "events.out.tfevents.*"))
   d = dbmod.ExperimentDB(database)
-  row = d.run(_run_id(out))
+  row = d.run(run_id(out))
   assert row["status"] == "done" and row["task"] == "asc-inc-cog" and row["algo"] == "ppo"
   stats = d.stats(row["run_id"])
   assert len(stats) >= 2 and all(s["return_mean"] is not None for s in stats)
@@ -92,18 +85,7 @@ def test_evaluation_writes_a_valid_report(ppo_run, tmp_path):
   for k in ("progress", "success", "cog_deviation", "pitch_rate", "tipped_over", "length"):
     assert set(r["metrics"][k]) == {"mean", "std"} and len(r["per_trial"][k]) == 4
   assert 0.0 <= r["metrics"]["progress"]["mean"] <= 1.0 + 1e-6
-  assert len(dbmod.ExperimentDB(database).evals(_run_id(out))) == 4
-
-
-def test_sac_tiny_run_trains_and_exports(tmp_path):
-  from train.policy import load_policy
-  out = str(tmp_path / "sac")
-  rc = run.main(["--task", "des-inc-ang", "--algo", "sac", "--preset", "cpu", "--steps", "256",
-                 "--out", out, "--db", str(tmp_path / "db.sqlite"), *TINY])
-  assert rc == 0
-  act = load_policy(os.path.join(out, "policy"))
-  assert np.asarray(act(np.zeros((2, 6), np.float32))).shape == (2, 5)
-  assert dbmod.ExperimentDB(str(tmp_path / "db.sqlite")).run(_run_id(out))["status"] == "done"
+  assert len(dbmod.ExperimentDB(database).evals(run_id(out))) == 4
 
 
 def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path, capsys):

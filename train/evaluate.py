@@ -76,6 +76,22 @@ def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record:
   return per_trial, (np.asarray(qpos) if record else None), render_model
 
 
+def _record_trials(args: argparse.Namespace, run_id: str, per_trial: dict) -> None:
+  """One database row per trial, where the run is in the database."""
+  from train.db import ExperimentDB, default_path  # noqa: PLC0415
+  db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(args.run_dir))))
+  try:
+    db.run(run_id)
+  except KeyError:
+    print(f"note: run {run_id} is not in {db.path}; trials not recorded there", file=sys.stderr)
+    return
+  db.log_evals(run_id, [
+      {"scene": args.scene, "trial": i, "progress": float(per_trial["progress"][i]),
+       "success": int(per_trial["success"][i] > 0), "cog_deviation": float(per_trial["cog_deviation"][i]),
+       "pitch_rate": float(per_trial["pitch_rate"][i]), "tipped_over": int(per_trial["tipped_over"][i] > 0),
+       "length": int(per_trial["length"][i])} for i in range(args.trials)])
+
+
 def main(argv: list[str] | None = None) -> int:
   p = argparse.ArgumentParser(prog="python -m train.evaluate", description=__doc__.splitlines()[0])
   p.add_argument("run_dir")
@@ -121,17 +137,7 @@ def main(argv: list[str] | None = None) -> int:
   out = args.out or os.path.join(args.run_dir, f"eval-{args.scene}.json")
   with open(out, "w") as f:
     json.dump(report, f, indent=1)
-  from train.db import ExperimentDB, default_path  # noqa: PLC0415
-  db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(args.run_dir))))
-  try:
-    db.run(meta["run_id"])
-    db.log_evals(meta["run_id"], [
-        {"scene": args.scene, "trial": i, "progress": float(per_trial["progress"][i]),
-         "success": int(per_trial["success"][i] > 0), "cog_deviation": float(per_trial["cog_deviation"][i]),
-         "pitch_rate": float(per_trial["pitch_rate"][i]), "tipped_over": int(per_trial["tipped_over"][i] > 0),
-         "length": int(per_trial["length"][i])} for i in range(args.trials)])
-  except KeyError:
-    print(f"note: run {meta['run_id']} is not in {db.path}; trials not recorded there", file=sys.stderr)
+  _record_trials(args, meta["run_id"], per_trial)
   if args.video:
     from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
     write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)

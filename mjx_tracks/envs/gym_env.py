@@ -68,7 +68,19 @@ def _frame(core, state, index: int, width: int, height: int) -> np.ndarray:
   return render_frames(mj, es.data.qpos[None], width, height)[0]
 
 
-class TrackedRobotGymEnv(gym.Env):
+class _KeepsCurriculum:
+  """The curriculum of a Gymnasium env lives across its resets; it can be read and restored."""
+
+  def curriculum_state(self) -> GlobalStats:
+    """The curriculum (and penalty normalizer) state, kept across resets."""
+    return self._glob if self._state is None else self._stack.global_stats(self._state)
+
+  def set_curriculum_state(self, glob: GlobalStats) -> None:
+    """Restores a state from curriculum_state(); the next reset draws at its eps."""
+    self._glob, self._state = glob, None
+
+
+class TrackedRobotGymEnv(_KeepsCurriculum, gym.Env):
   """One robot of a task, with proper spaces, seeding, terminated / truncated and rgb rendering."""
 
   metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -84,14 +96,6 @@ class TrackedRobotGymEnv(gym.Env):
     self._state = None
     self._glob = self._stack.initial
     self.metadata = dict(self.metadata, render_fps=int(round(1 / self._stack.core.cfg.control.period)))
-
-  def curriculum_state(self) -> GlobalStats:
-    """The curriculum (and penalty normalizer) state, kept across resets."""
-    return self._glob if self._state is None else self._stack.global_stats(self._state)
-
-  def set_curriculum_state(self, glob: GlobalStats) -> None:
-    """Restores a state from curriculum_state(); the next reset draws at its eps."""
-    self._glob, self._state = glob, None
 
   def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
     super().reset(seed=seed)
@@ -116,7 +120,7 @@ class TrackedRobotGymEnv(gym.Env):
     return _frame(self._stack.core, self._state, 0, *self._size)
 
 
-class TrackedRobotVectorEnv(VectorEnv):
+class TrackedRobotVectorEnv(_KeepsCurriculum, VectorEnv):
   """N robots of a task stepped by one jitted batch call."""
 
   metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.SAME_STEP}
@@ -134,14 +138,6 @@ class TrackedRobotVectorEnv(VectorEnv):
     self._size = render_size
     self._state = None
     self._glob = self._stack.initial
-
-  def curriculum_state(self) -> GlobalStats:
-    """The curriculum (and penalty normalizer) state, kept across resets."""
-    return self._glob if self._state is None else self._stack.global_stats(self._state)
-
-  def set_curriculum_state(self, glob: GlobalStats) -> None:
-    """Restores a state from curriculum_state(); the next reset draws at its eps."""
-    self._glob, self._state = glob, None
 
   def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
     if seed is not None:

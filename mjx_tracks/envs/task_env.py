@@ -1,7 +1,7 @@
 """The task environment: a Brax `Env` whose reset / step are pure functions of a typed state.
 
 One control step: action -> low-level control -> physics substeps with the track model -> sensors
-(IMU, pose, joints, depth beams) -> monitor (reward terms, termination, safety) -> observation.
+(IMU, pose, joints, depth beams) -> rewards (reward terms, termination, safety) -> observation.
 The scene (staircase or navigation area) is data in the state, drawn at reset from the scene
 sampler at difficulty eps; `reset_at(key, eps, penalty_k)` is what the curriculum wrapper calls.
 """
@@ -15,7 +15,7 @@ from flax import struct
 from mujoco import mjx
 
 from mjx_tracks.envs.beams import BeamLayout, depth_beams
-from mjx_tracks.envs.config import ConfigError, TaskConfig
+from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig
 from mjx_tracks.envs.observations import Sensors, observe, part_sizes
 from mjx_tracks.envs.rewards import (REWARD_TERMS, Monitor, cog_deviation, goal_distance, normalizer_init,
                                      on_stairs)
@@ -49,8 +49,8 @@ class EnvState:
   key: jax.Array
 
 
-def _make_scene(cfg: TaskConfig):
-  s = cfg.scene
+def make_scene(s: SceneConfig) -> StairScene | NavScene:
+  """The scene generator of a task's scene section."""
   if s.kind == "stairs":
     ranges = stair_ranges(s.tread, s.riser, s.steps)
     return StairScene(s.direction, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
@@ -70,7 +70,7 @@ class TrackedRobotEnv(Env):
                                           cfg.control.v_range)
     except ValueError as e:
       raise ConfigError(f"control: {e}") from e
-    self.scene = _make_scene(cfg)
+    self.scene = make_scene(cfg.scene)
     self.sim = Simulator.create(self.robot, self.scene.world_xml(), cfg.physics)
     self.substeps = int(round(cfg.control.period / cfg.physics.timestep))
     o = cfg.observation
@@ -195,4 +195,4 @@ def observation_names(env: TrackedRobotEnv) -> list[str]:
   return names(env.cfg.observation.parts, env.part_sizes)
 
 
-__all__ = ["EnvState", "TrackedRobotEnv", "METRICS", "observation_names"]
+__all__ = ["EnvState", "TrackedRobotEnv", "METRICS", "make_scene", "observation_names"]
