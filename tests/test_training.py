@@ -114,6 +114,32 @@ def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path,
   assert evaluate.main([str(tmp_path), "--trials", "2"]) == 2
 
 
+def test_a_failed_resume_touches_no_record(ppo_run, tmp_path, capsys):
+  out, database = ppo_run
+  before = open(os.path.join(out, "run.json")).read()
+  status = dbmod.ExperimentDB(database).run(run_id(out))["status"]
+  assert run.main(["--resume", out, "--db", database]) == 2  # already finished
+  err = capsys.readouterr().err
+  assert "is finished" in err and f"--resume {out} --steps N" in err
+  assert run.main(["--resume", out, "--task", "asc-uni-cog", "--set", "reward.cog_scale=1", "--db", database]) == 2
+  assert "drop --task, --set" in capsys.readouterr().err
+  assert open(os.path.join(out, "run.json")).read() == before
+  assert dbmod.ExperimentDB(database).run(run_id(out))["status"] == status == "done"
+
+
+def test_run_ids_started_in_the_same_second_differ():
+  ids = {run.new_run_id("asc-inc-cog", "ppo", 0) for _ in range(50)}
+  assert len(ids) == 50 and all(i.startswith("asc-inc-cog-ppo-s0-") for i in ids)
+
+
+def test_importing_the_package_prints_no_warp_noise():
+  import subprocess
+  import sys
+  out = subprocess.run([sys.executable, "-c", "import mjx_tracks"], capture_output=True, text=True,
+                       env={**os.environ, "JAX_PLATFORMS": "cpu"}, timeout=120)
+  assert out.returncode == 0 and "warp" not in out.stdout + out.stderr
+
+
 def _write_rows(path, run_id, n):
   d = dbmod.ExperimentDB(path)
   for i in range(n):

@@ -16,6 +16,7 @@ import dataclasses
 import datetime
 import json
 import os
+import secrets
 import signal
 import sys
 from typing import Any
@@ -57,29 +58,61 @@ def _default_preset() -> str:
   return "gpu" if jax.default_backend() in ("gpu", "cuda", "rocm", "tpu") else "cpu"
 
 
+# options a resumed run takes from its run.json; giving one with --resume is refused
+RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "early_stop_return")
+
+
+def _latest_checkpoint_step(run_dir: str) -> int | None:
+  """The newest complete checkpoint's step (orbax names finished steps by number alone)."""
+  path = os.path.join(run_dir, "checkpoints")
+  steps = [int(d) for d in os.listdir(path) if d.isdigit()] if os.path.isdir(path) else []
+  return max(steps, default=None)
+
+
+def _plan_resume(args: argparse.Namespace) -> RunPlan:
+  """The plan of a run to continue; refuses options that would change it, and finished runs."""
+  given = [f"--{n.replace('_', '-')}" for n in RESUME_FIXED if getattr(args, n) not in (None, [], False)]
+  if given:
+    raise RunError(f"--resume continues a run with its own settings; drop {', '.join(given)} "
+                   "(only --steps and --db may be given)")
+  meta_path = os.path.join(args.resume, "run.json")
+  if not os.path.exists(meta_path):
+    raise RunError(f"--resume {args.resume}: no run.json there; not a run directory")
+  try:
+    with open(meta_path) as f:
+      meta = json.load(f)
+  except json.JSONDecodeError as e:
+    raise RunError(f"--resume {args.resume}: run.json is corrupt ({e})")
+  total = meta["total_steps"] if args.steps is None else args.steps
+  done = _latest_checkpoint_step(args.resume)
+  if done is None:
+    raise RunError(f"--resume {args.resume}: no checkpoint in {os.path.join(args.resume, 'checkpoints')} "
+                   "to resume from")
+  if done >= total:
+    raise RunError(f"run {meta['run_id']} is finished ({done:,} of {meta['total_steps']:,} steps); to train "
+                   f"it further: --resume {args.resume} --steps N with N > {done:,}")
+  preset = dataclasses.replace(get_preset(meta["algo"], meta["preset"]), num_envs=meta["num_envs"])
+  return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
+                 preset, meta["seed"], tuple(meta["overrides"]), from_dict(meta["config"]), total,
+                 meta["num_envs"], True, meta.get("early_stop_return"))
+
+
+def new_run_id(task: str, algo: str, seed: int) -> str:
+  """TASK-ALGO-sSEED-TIME-XXXX: the random suffix keeps runs started in the same second apart."""
+  stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+  return f"{task}-{algo}-s{seed}-{stamp}-{secrets.token_hex(2)}"
+
+
 def plan_run(args: argparse.Namespace) -> RunPlan:
   """Resolves task, preset, config and run directory; raises RunError / ConfigError on bad input."""
   if args.resume:
-    meta_path = os.path.join(args.resume, "run.json")
-    if not os.path.exists(meta_path):
-      raise RunError(f"--resume {args.resume}: no run.json there; not a run directory")
-    try:
-      with open(meta_path) as f:
-        meta = json.load(f)
-    except json.JSONDecodeError as e:
-      raise RunError(f"--resume {args.resume}: run.json is corrupt ({e})")
-    preset = get_preset(meta["algo"], meta["preset"])
-    preset = dataclasses.replace(preset, num_envs=meta["num_envs"])
-    return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"],
-                   meta["preset"], preset, meta["seed"], tuple(meta["overrides"]),
-                   from_dict(meta["config"]), meta["total_steps"] if args.steps is None else args.steps,
-                   meta["num_envs"],
-                   True, meta.get("early_stop_return"))
+    return _plan_resume(args)
   if not args.task:
     raise RunError("--task is required (or --resume DIR)")
+  algo, seed = args.algo or "ppo", 0 if args.seed is None else args.seed
   preset_name = args.preset or _default_preset()
   try:
-    preset = get_preset(args.algo, preset_name)
+    preset = get_preset(algo, preset_name)
   except ValueError as e:
     raise RunError(str(e))
   overrides = tuple(preset.config_overrides) + tuple(args.set)
@@ -93,8 +126,7 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   steps = preset.num_timesteps if args.steps is None else args.steps
   if steps < 1:
     raise RunError("--steps must be >= 1")
-  stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-  run_id = f"{args.task}-{args.algo}-s{args.seed}-{stamp}"
+  run_id = new_run_id(args.task, algo, seed)
   out_dir = os.path.abspath(args.out or os.path.join("runs", run_id))
   if os.path.exists(out_dir) and os.listdir(out_dir):
     other = os.path.join(out_dir, "run.json")
@@ -106,21 +138,25 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
         EARLY_STOP_RETURN.get(cfg.scene.direction if cfg.scene.kind == "stairs" else "", None)
     if early is None:
       raise RunError("--early-stop needs --early-stop-return for this task")
-  return RunPlan(run_id, out_dir, args.task, args.algo, preset_name, preset, args.seed, tuple(args.set),
+  return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
                  cfg, steps, num_envs, False, early)
 
 
 def _write_run_json(plan: RunPlan) -> None:
+  """run.json (atomically); a resumed run keeps its creation time."""
   os.makedirs(plan.out_dir, exist_ok=True)
+  path = os.path.join(plan.out_dir, "run.json")
+  now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+  created = json.load(open(path)).get("created", now) if plan.resume and os.path.exists(path) else now
   meta = {"run_id": plan.run_id, "task": plan.task, "algo": plan.algo, "preset": plan.preset_name,
           "seed": plan.seed, "overrides": list(plan.overrides), "config": plan.cfg.to_dict(),
           "total_steps": plan.total_steps, "num_envs": plan.num_envs,
           "early_stop_return": plan.early_stop_return,
-          "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
-  tmp = os.path.join(plan.out_dir, "run.json.tmp")
+          "created": created}
+  tmp = path + ".tmp"
   with open(tmp, "w") as f:
     json.dump(meta, f, indent=1)
-  os.replace(tmp, os.path.join(plan.out_dir, "run.json"))
+  os.replace(tmp, path)
 
 
 def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
@@ -248,11 +284,11 @@ def main(argv: list[str] | None = None) -> int:
   p = argparse.ArgumentParser(prog="python -m train.run", description=__doc__.splitlines()[0],
                               formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
   p.add_argument("--task", help="task name (configs/TASK.yaml)")
-  p.add_argument("--algo", choices=("ppo", "sac"), default="ppo")
+  p.add_argument("--algo", choices=("ppo", "sac"), help="default ppo")
   p.add_argument("--preset", help="cpu | gpu (| paper for sac); default from the JAX backend")
   p.add_argument("--num-envs", type=int, help="parallel environments (default: the preset's)")
   p.add_argument("--steps", type=int, help="total environment steps (default: the preset's)")
-  p.add_argument("--seed", type=int, default=0)
+  p.add_argument("--seed", type=int, help="default 0")
   p.add_argument("--out", help="run directory (default runs/<task>-<algo>-s<seed>-<time>)")
   p.add_argument("--db", help="experiment database (default: experiments.sqlite beside the run directory)")
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
