@@ -73,6 +73,15 @@ def test_resume_continues_from_the_saved_step_and_curriculum(ppo_run, tmp_path):
   _, after = ck.restore()
   c0, c1 = before["global"]["curriculum"], after["global"]["curriculum"]
   assert c1["finished"] > c0["finished"] > 0  # the curriculum kept counting from where it was
+  d = dbmod.ExperimentDB(database)
+  rid = run_id(copy)
+  steps = [r["step"] for r in d.stats(rid)]
+  assert len(steps) == len(set(steps))  # the resumed part replaced, not duplicated, its rows
+  walls = [r["wall_s"] for r in d.stats(rid)]
+  assert walls == sorted(walls)  # wall time accumulates across the resume
+  events = [e["event"] for e in d.events(rid)]
+  assert events[0] == "started" and "resumed" in events and events[-1] == "finished"
+  assert "checkpoint" in events and d.run(rid)["total_steps"] == before_step + 1024
 
 
 def test_evaluation_writes_a_valid_report(ppo_run, tmp_path):
@@ -127,6 +136,18 @@ def test_a_failed_resume_touches_no_record(ppo_run, tmp_path, capsys):
   assert dbmod.ExperimentDB(database).run(run_id(out))["status"] == status == "done"
 
 
+def test_db_cli_lists_with_a_header_and_takes_run_directories(ppo_run, capsys):
+  out, database = ppo_run
+  assert dbmod.main(["--db", database, "list"]) == 0
+  lines = capsys.readouterr().out.splitlines()
+  assert lines[0].split()[:3] == ["run", "task", "algo"] and any(out in line for line in lines[1:])
+  assert dbmod.main(["--db", database, "show", out]) == 0
+  shown = capsys.readouterr().out
+  assert run_id(out) in shown and "event" in shown and "checkpoint" in shown
+  assert dbmod.main(["--db", database, "export", out, "--csv"]) == 0
+  assert capsys.readouterr().out.startswith("step,wall_s")
+
+
 def test_run_ids_started_in_the_same_second_differ():
   ids = {run.new_run_id("asc-inc-cog", "ppo", 0) for _ in range(50)}
   assert len(ids) == 50 and all(i.startswith("asc-inc-cog-ppo-s0-") for i in ids)
@@ -169,3 +190,21 @@ def test_a_run_whose_process_died_reads_crashed(tmp_path):
   assert d.run("dead")["status"] == "crashed"
   assert dbmod.main(["--db", str(tmp_path / "c.sqlite"), "list"]) == 0
   assert dbmod.main(["--db", str(tmp_path / "c.sqlite"), "show", "nope"]) == 2
+
+
+def test_a_resume_drops_the_rows_past_its_checkpoint_and_records_the_crash(tmp_path):
+  d = dbmod.ExperimentDB(str(tmp_path / "r.sqlite"))
+  d.start("r", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path), 10)
+  for step in range(1, 6):
+    d.log_stats("r", {"step": step, "wall_s": 10.0 * step}, {})
+  d.set_checkpoint("r", str(tmp_path), 3)
+  with d._conn() as c:  # the process died: its pid is gone, the row still says running
+    c.execute("UPDATE experiments SET pid=? WHERE run_id='r'", (2**22 + 12345,))
+  assert d.wall_offset("r", 3) == 30.0
+  d.start("r", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path), 20, resume_step=3)
+  assert [r["step"] for r in d.stats("r")] == [1, 2, 3]
+  assert [(e["event"], e["step"]) for e in d.events("r")] == [
+      ("started", 0), ("checkpoint", 3), ("crashed", None), ("resumed", 3)]
+  assert d.run("r")["total_steps"] == 20
+  d.finish("r", "killed", {}, 4)
+  assert d.events("r")[-1]["event"] == "interrupted"

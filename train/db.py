@@ -1,7 +1,8 @@
-"""Embedded experiment database (SQLite): experiments, training statistics, evaluation trials.
+"""Embedded experiment database (SQLite): experiments, their events, training statistics,
+evaluation trials.
 
 python -m train.db [--db PATH] list
-python -m train.db [--db PATH] show RUN
+python -m train.db [--db PATH] show RUN          (RUN: a run id or a run directory)
 python -m train.db [--db PATH] export RUN --csv [--out FILE]
 
 Concurrent runs may share one file: WAL journaling and a busy timeout serialize the writers.
@@ -37,6 +38,10 @@ CREATE TABLE IF NOT EXISTS stats (
   pitch_rate_mean REAL, tipped_rate REAL, success_rate REAL, metrics_json TEXT
 );
 CREATE INDEX IF NOT EXISTS stats_run ON stats(run_id, step);
+CREATE TABLE IF NOT EXISTS events (
+  run_id TEXT NOT NULL REFERENCES experiments(run_id), event TEXT NOT NULL, step INTEGER,
+  time TEXT NOT NULL, detail TEXT
+);
 CREATE TABLE IF NOT EXISTS evals (
   run_id TEXT NOT NULL REFERENCES experiments(run_id), scene TEXT NOT NULL, trial INTEGER NOT NULL,
   progress REAL, success INTEGER, cog_deviation REAL, pitch_rate REAL, tipped_over INTEGER,
@@ -45,6 +50,10 @@ CREATE TABLE IF NOT EXISTS evals (
 """
 STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", "progress_mean",
                 "cog_deviation_mean", "pitch_rate_mean", "tipped_rate", "success_rate")
+EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed", "crashed")
+# a run's final status -> the event that records it
+STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "killed": "interrupted",
+                "failed": "failed", "crashed": "crashed"}
 EVAL_COLUMNS = ("scene", "trial", "progress", "success", "cog_deviation", "pitch_rate",
                 "tipped_over", "length")
 
@@ -88,18 +97,35 @@ class ExperimentDB:
 
   # --- writing ----------------------------------------------------------------------------
   def start(self, run_id: str, task: str, algo: str, preset: str, seed: int, config: dict,
-            out_dir: str, total_steps: int) -> None:
-    """Inserts a run, or marks a resumed one running again."""
+            out_dir: str, total_steps: int, resume_step: int | None = None) -> None:
+    """Inserts a run, or marks a resumed one running again; statistics rows past the step it resumes
+    from are dropped (they will be logged again), so no step is recorded twice."""
     with self._conn() as c:
-      row = c.execute("SELECT run_id FROM experiments WHERE run_id = ?", (run_id,)).fetchone()
+      row = c.execute("SELECT status FROM experiments WHERE run_id = ?", (run_id,)).fetchone()
+      if row and row["status"] == "running":  # its last process died without closing the run
+        self._event(c, run_id, "crashed", None, "found on resume")
       if row:
-        c.execute("UPDATE experiments SET status='running', pid=?, host=?, ended=NULL WHERE run_id=?",
-                  (os.getpid(), socket.gethostname(), run_id))
+        c.execute("UPDATE experiments SET status='running', pid=?, host=?, ended=NULL, total_steps=? "
+                  "WHERE run_id=?", (os.getpid(), socket.gethostname(), total_steps, run_id))
+        c.execute("DELETE FROM stats WHERE run_id=? AND step>?", (run_id, resume_step or 0))
       else:
         c.execute("INSERT INTO experiments (run_id, task, algo, preset, seed, config_json, status, "
                   "started, out_dir, pid, host, total_steps) VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
                   (run_id, task, algo, preset, seed, json.dumps(config), "running", _now(),
                    os.path.abspath(out_dir), os.getpid(), socket.gethostname(), total_steps))
+      self._event(c, run_id, "resumed" if row else "started", resume_step or 0)
+
+  def _event(self, c: sqlite3.Connection, run_id: str, event: str, step: int | None, detail: str = "") -> None:
+    if event not in EVENTS:
+      raise ValueError(f"unknown event {event!r}; known: {EVENTS}")
+    c.execute("INSERT INTO events (run_id, event, step, time, detail) VALUES (?,?,?,?,?)",
+              (run_id, event, step, _now(), detail))
+
+  def wall_offset(self, run_id: str, step: int) -> float:
+    """Training wall time (s) already spent up to a step (what a resumed run adds to)."""
+    with self._conn() as c:
+      r = c.execute("SELECT MAX(wall_s) FROM stats WHERE run_id=? AND step<=?", (run_id, step)).fetchone()
+    return float(r[0] or 0.0)
 
   def log_stats(self, run_id: str, row: dict[str, Any], metrics: dict[str, float]) -> None:
     vals = [row.get(k) for k in STAT_COLUMNS]
@@ -108,14 +134,17 @@ class ExperimentDB:
                 f"VALUES (?, {', '.join('?' * len(STAT_COLUMNS))}, ?)",
                 [run_id, *vals, json.dumps(metrics)])
 
-  def set_checkpoint(self, run_id: str, checkpoint_dir: str) -> None:
+  def set_checkpoint(self, run_id: str, checkpoint_dir: str, step: int) -> None:
     with self._conn() as c:
       c.execute("UPDATE experiments SET checkpoint_dir=? WHERE run_id=?", (checkpoint_dir, run_id))
+      self._event(c, run_id, "checkpoint", step)
 
-  def finish(self, run_id: str, status: str, final: dict | None = None) -> None:
+  def finish(self, run_id: str, status: str, final: dict | None = None, step: int | None = None,
+             detail: str = "") -> None:
     with self._conn() as c:
       c.execute("UPDATE experiments SET status=?, ended=?, final_json=? WHERE run_id=?",
                 (status, _now(), json.dumps(final or {}), run_id))
+      self._event(c, run_id, STATUS_EVENT[status], step, detail)
 
   def log_evals(self, run_id: str, trials: list[dict[str, Any]]) -> None:
     with self._conn() as c:
@@ -144,6 +173,11 @@ class ExperimentDB:
     with self._conn() as c:
       return [dict(r) for r in c.execute("SELECT * FROM stats WHERE run_id=? ORDER BY step", (run_id,))]
 
+  def events(self, run_id: str) -> list[dict[str, Any]]:
+    with self._conn() as c:
+      return [dict(r) for r in c.execute("SELECT event, step, time, detail FROM events WHERE run_id=? "
+                                         "ORDER BY rowid", (run_id,))]
+
   def evals(self, run_id: str) -> list[dict[str, Any]]:
     with self._conn() as c:
       return [dict(r) for r in c.execute("SELECT * FROM evals WHERE run_id=? ORDER BY scene, trial", (run_id,))]
@@ -153,15 +187,58 @@ def default_path(out_root: str = DEFAULT_ROOT) -> str:
   return os.path.join(out_root, DEFAULT_NAME)
 
 
+def resolve_run(arg: str) -> str:
+  """A run id, or a run directory (its run.json names the run)."""
+  meta = os.path.join(arg, "run.json")
+  if os.path.isdir(arg) and os.path.exists(meta):
+    with open(meta) as f:
+      return json.load(f)["run_id"]
+  return arg
+
+
+def _list(db: ExperimentDB) -> None:
+  print(f"{'run':52s} {'task':12s} {'algo':4s} {'status':13s} {'started':25s} {'steps':>10s} {'return':>7s}  directory")
+  for r in db.runs():
+    final = json.loads(r["final_json"] or "{}")
+    ret = final.get("return_mean")
+    print(f"{r['run_id']:52s} {r['task']:12s} {r['algo']:4s} {r['status']:13s} {r['started']:25s} "
+          f"{final.get('step', '-')!s:>10s} {('-' if ret is None else f'{ret:.3f}'):>7s}  {r['out_dir']}")
+
+
+def _show(db: ExperimentDB, run: dict) -> None:
+  print(json.dumps({k: v for k, v in run.items() if k != "config_json"}, indent=1))
+  for e in db.events(run["run_id"]):
+    print(f"event {e['time']} {e['event']:11s} step {e['step'] if e['step'] is not None else '-'} {e['detail'] or ''}")
+  stats = db.stats(run["run_id"])
+  if stats:
+    print("last statistics:", json.dumps({k: stats[-1][k] for k in STAT_COLUMNS}))
+  evals = db.evals(run["run_id"])
+  for scene in sorted({e["scene"] for e in evals}):
+    trials = [e for e in evals if e["scene"] == scene]
+    mean = lambda k: sum(t[k] for t in trials) / len(trials)
+    print(f"eval {scene}: {len(trials)} trials, progress {mean('progress'):.3f}, "
+          f"success {mean('success'):.2f}, tipped {mean('tipped_over'):.2f}")
+
+
+def _export(db: ExperimentDB, run_id: str, path: str | None) -> None:
+  out = open(path, "w", newline="") if path else sys.stdout
+  w = csv.writer(out)
+  w.writerow(STAT_COLUMNS)
+  for r in db.stats(run_id):
+    w.writerow([r[k] for k in STAT_COLUMNS])
+  if path:
+    out.close()
+
+
 def main(argv: list[str] | None = None) -> int:
   p = argparse.ArgumentParser(prog="python -m train.db", description=__doc__.splitlines()[0])
   p.add_argument("--db", default=default_path(), help=f"SQLite file (default {default_path()})")
   sub = p.add_subparsers(dest="cmd", required=True)
   sub.add_parser("list", help="one line per experiment")
-  s = sub.add_parser("show", help="an experiment's row, last statistics and evaluations")
-  s.add_argument("run")
+  s = sub.add_parser("show", help="an experiment's row, events, last statistics and evaluations")
+  s.add_argument("run", help="run id or run directory")
   e = sub.add_parser("export", help="an experiment's training statistics")
-  e.add_argument("run")
+  e.add_argument("run", help="run id or run directory")
   e.add_argument("--csv", action="store_true", required=True)
   e.add_argument("--out", help="file (default: standard output)")
   args = p.parse_args(argv)
@@ -170,34 +247,17 @@ def main(argv: list[str] | None = None) -> int:
     return 2
   db = ExperimentDB(args.db)
   if args.cmd == "list":
-    for r in db.runs():
-      final = json.loads(r["final_json"] or "{}")
-      print(f"{r['run_id']:40s} {r['task']:12s} {r['algo']:4s} {r['status']:8s} {r['started']}  "
-            f"steps={final.get('step', '-')} return={final.get('return_mean', '-')}")
+    _list(db)
     return 0
   try:
-    run = db.run(args.run)
+    run = db.run(resolve_run(args.run))
   except KeyError as err:
     print(f"error: {err.args[0]}", file=sys.stderr)
     return 2
   if args.cmd == "show":
-    print(json.dumps({k: v for k, v in run.items() if k != "config_json"}, indent=1))
-    stats = db.stats(args.run)
-    if stats:
-      print("last statistics:", json.dumps({k: stats[-1][k] for k in STAT_COLUMNS}))
-    for scene in sorted({e["scene"] for e in db.evals(args.run)}):
-      trials = [e for e in db.evals(args.run) if e["scene"] == scene]
-      mean = lambda k: sum(t[k] for t in trials) / len(trials)
-      print(f"eval {scene}: {len(trials)} trials, progress {mean('progress'):.3f}, "
-            f"success {mean('success'):.2f}, tipped {mean('tipped_over'):.2f}")
-    return 0
-  out = open(args.out, "w", newline="") if args.out else sys.stdout
-  w = csv.writer(out)
-  w.writerow(STAT_COLUMNS)
-  for r in db.stats(args.run):
-    w.writerow([r[k] for k in STAT_COLUMNS])
-  if args.out:
-    out.close()
+    _show(db, run)
+  else:
+    _export(db, run["run_id"], args.out)
   return 0
 
 

@@ -36,12 +36,13 @@ class Reporter:
   """Called with (global step, brax metrics); prints, logs to TensorBoard and the database."""
 
   def __init__(self, total_steps: int, start_step: int, db=None, run_id: str | None = None,
-               tb_dir: str | None = None, eps_source=None, stream=sys.stdout):
+               tb_dir: str | None = None, eps_source=None, stream=sys.stdout, wall_offset: float = 0.0):
     self.total, self.start_step = total_steps, start_step
     self.db, self.run_id = db, run_id
     self.eps_source = eps_source
     self.stream = stream
-    self.t0 = time.time()
+    self.session_t0 = time.time()
+    self.t0 = self.session_t0 - wall_offset  # s: a resumed run's wall time continues from its checkpoint
     self.last: tuple[float, int] | None = None
     self.latest: dict[str, float] = {}
     self.writer = None
@@ -73,7 +74,7 @@ class Reporter:
 
   def _print(self, row: dict, kind: str) -> None:
     f = lambda k, fmt: (fmt.format(row[k]) if row.get(k) is not None else "-")
-    elapsed = row["wall_s"]
+    elapsed = time.time() - self.session_t0  # this process's share, for the ETA
     done = (row["step"] - self.start_step) / max(self.total - self.start_step, 1)
     eta = elapsed / done - elapsed if done > 0 else float("nan")
     print(f"[{kind:5s}] {row['step']:>11,}/{self.total:,} ({100 * row['step'] / max(self.total, 1):5.1f}%) "
@@ -81,7 +82,7 @@ class Reporter:
           f"progress {f('progress_mean', '{:.3f}')} | eps {f('eps', '{:.2f}')} | "
           f"cog {f('cog_deviation_mean', '{:.3f}')} m | pitch rate {f('pitch_rate_mean', '{:.2f}')} rad/s | "
           f"tipped {f('tipped_rate', '{:.1%}')} | success {f('success_rate', '{:.1%}')} | "
-          f"{elapsed:,.0f} s, eta {eta:,.0f} s", file=self.stream, flush=True)
+          f"{row['wall_s']:,.0f} s, eta {eta:,.0f} s", file=self.stream, flush=True)
 
   def close(self) -> None:
     if self.writer:

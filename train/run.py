@@ -51,6 +51,7 @@ class RunPlan:
   num_envs: int
   resume: bool
   early_stop_return: float | None
+  start_step: int = 0  # the checkpoint a resumed run continues from
 
 
 def _default_preset() -> str:
@@ -94,7 +95,7 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   preset = dataclasses.replace(get_preset(meta["algo"], meta["preset"]), num_envs=meta["num_envs"])
   return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
                  preset, meta["seed"], tuple(meta["overrides"]), from_dict(meta["config"]), total,
-                 meta["num_envs"], True, meta.get("early_stop_return"))
+                 meta["num_envs"], True, meta.get("early_stop_return"), done)
 
 
 def new_run_id(task: str, algo: str, seed: int) -> str:
@@ -199,7 +200,8 @@ def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
   wrap_eval = wrap_for_training(eval_core, "i")
   wrap = lambda env, **kw: (wrap_train if env is core else wrap_eval)(env, **kw)
   eps = lambda: float(latest["global"].curriculum.eps) if latest["global"] is not None else None
-  reporter = Reporter(plan.total_steps, start_step, db, plan.run_id, os.path.join(plan.out_dir, "tb"), eps)
+  reporter = Reporter(plan.total_steps, start_step, db, plan.run_id, os.path.join(plan.out_dir, "tb"), eps,
+                      wall_offset=db.wall_offset(plan.run_id, start_step))
   meta_base = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": spec.to_json()}
   state = {"stop": False, "saved": None}
 
@@ -207,7 +209,7 @@ def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
     g = latest["global"]
     ckpts.save(step, params, {**meta_base, "global": global_stats_to_json(g) if g is not None else None})
     state["saved"] = step
-    db.set_checkpoint(plan.run_id, ckpts.dir)
+    db.set_checkpoint(plan.run_id, ckpts.dir, step)
 
   def progress(step: int, metrics) -> None:
     row = reporter(start_step + step, metrics)
@@ -309,7 +311,7 @@ def main(argv: list[str] | None = None) -> int:
   _write_run_json(plan)
   db = ExperimentDB(args.db or default_path(os.path.dirname(plan.out_dir)))
   db.start(plan.run_id, plan.task, plan.algo, plan.preset_name, plan.seed, plan.cfg.to_dict(),
-           plan.out_dir, plan.total_steps)
+           plan.out_dir, plan.total_steps, resume_step=plan.start_step if plan.resume else None)
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs, "
         f"{plan.total_steps:,} steps -> {plan.out_dir}", flush=True)
   signal.signal(signal.SIGTERM, _sigterm)
@@ -326,7 +328,7 @@ def main(argv: list[str] | None = None) -> int:
     print("interrupted: the last checkpoint is kept; continue with --resume " + plan.out_dir, file=sys.stderr)
     return 130
   finally:
-    db.finish(plan.run_id, status, final)
+    db.finish(plan.run_id, status, final, final.get("step"), "early stop" if status == "stopped_early" else "")
   print(json.dumps({k: v for k, v in final.items()}, indent=1))
   return 0
 
