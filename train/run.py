@@ -291,7 +291,7 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("--num-envs", type=int, help="parallel environments (default: the preset's)")
   p.add_argument("--steps", type=int, help="total environment steps (default: the preset's)")
   p.add_argument("--seed", type=int, help="default 0")
-  p.add_argument("--out", help="run directory (default runs/<task>-<algo>-s<seed>-<time>)")
+  p.add_argument("--out", help="run directory (default runs/<run id>)")
   p.add_argument("--db", help="experiment database (default: experiments.sqlite beside the run directory)")
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                  help="dotted config override, e.g. --set reward.cog_scale=0.5")
