@@ -136,6 +136,24 @@ def test_a_failed_resume_touches_no_record(ppo_run, tmp_path, capsys):
   assert dbmod.ExperimentDB(database).run(run_id(out))["status"] == status == "done"
 
 
+def test_a_killed_run_is_evaluated_from_its_checkpoints(ppo_run, tmp_path, capsys):
+  out, database = ppo_run
+  killed = str(tmp_path / "killed")
+  shutil.copytree(out, killed)
+  shutil.rmtree(os.path.join(killed, "policy"))  # killed before the export
+  report = str(tmp_path / "eval.json")
+  assert evaluate.main([killed, "--trials", "2", "--db", database, "--out", report]) == 2
+  assert "no policy.json" in capsys.readouterr().err
+  assert evaluate.main([killed, "--checkpoint", "--trials", "2", "--db", database, "--out", report]) == 0
+  r = json.load(open(report))
+  assert r["checkpoint"] and r["policy_step"] == RunCheckpoints(killed).latest_step()
+  first = min(RunCheckpoints(killed).mgr.all_steps())
+  assert evaluate.main([killed, "--checkpoint", str(first), "--trials", "2", "--db", database, "--out", report]) == 0
+  assert json.load(open(report))["policy_step"] == first
+  assert evaluate.main([killed, "--checkpoint", "999999", "--trials", "2", "--db", database]) == 2
+  assert "no checkpoint 999999" in capsys.readouterr().err
+
+
 def test_db_cli_lists_with_a_header_and_takes_run_directories(ppo_run, capsys):
   out, database = ppo_run
   assert dbmod.main(["--db", database, "list"]) == 0

@@ -57,6 +57,11 @@ class RunCheckpoints:
     return out["params"], out["meta"]
 
 
+def policy_params(raw: dict, spec: NetworkSpec):
+  """(normalizer, policy) parameters from a checkpoint's raw state dict (either algorithm)."""
+  return serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
+
+
 def restore_ppo_params(raw: dict, spec: NetworkSpec):
   """Raw state dict -> (normalizer, policy, value) with brax's types, for ppo.train(restore_params=)."""
   nets = spec.build()

@@ -3,7 +3,8 @@
 Scenes: hardest (every staircase parameter at its hard end of the task's ranges: n = n_max,
 l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by default), uniform (the task's ranges, uniform), incremental
 (the task's sampler at --eps), train (the task's own sampler at --eps). Trials run in parallel,
-one episode each, deterministic policy. Writes RUN_DIR/eval-<scene>.json (mean +- std of
+one episode each, deterministic policy: the exported RUN_DIR/policy, or with --checkpoint [STEP]
+a training checkpoint (a killed run has no export yet). Writes RUN_DIR/eval-<scene>.json (mean +- std of
 progress, success, COG deviation, |pitch rate|, tip-overs, episode length) and database rows.
 """
 
@@ -76,6 +77,17 @@ def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record:
   return per_trial, (np.asarray(qpos) if record else None), render_model
 
 
+def _policy(run_dir: str, checkpoint: str | None):
+  """(act, step) of the exported policy, or of a checkpoint ('latest' or a step number)."""
+  from train.policy import load_checkpoint_policy, load_policy, load_policy_info  # noqa: PLC0415
+  if checkpoint is None:
+    policy_dir = os.path.join(run_dir, "policy")
+    return load_policy(policy_dir), load_policy_info(policy_dir).get("step")
+  if checkpoint != "latest" and not checkpoint.isdigit():
+    raise ValueError(f"--checkpoint takes a step number (or nothing, for the latest), got {checkpoint!r}")
+  return load_checkpoint_policy(run_dir, None if checkpoint == "latest" else int(checkpoint))
+
+
 def _record_trials(args: argparse.Namespace, run_id: str, per_trial: dict) -> None:
   """One database row per trial, where the run is in the database."""
   from train.db import ExperimentDB, default_path  # noqa: PLC0415
@@ -102,6 +114,9 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>.json)")
   p.add_argument("--db", help="experiment database (default: beside the run directory)")
   p.add_argument("--video", help="MP4 of trial 0 (needs the video extra)")
+  p.add_argument("--checkpoint", nargs="?", const="latest", metavar="STEP",
+                 help="evaluate a training checkpoint (default the latest) instead of RUN_DIR/policy, "
+                      "e.g. of a killed run")
   args = p.parse_args(argv)
   run_json = os.path.join(args.run_dir, "run.json")
   if not os.path.exists(run_json):
@@ -113,15 +128,12 @@ def main(argv: list[str] | None = None) -> int:
   import jax  # noqa: PLC0415
 
   from mjx_tracks import compile_cache  # noqa: PLC0415
-  from train.policy import load_policy, load_policy_info  # noqa: PLC0415
   compile_cache.enable()
   with open(run_json) as f:
     meta = json.load(f)
   try:
     cfg = scene_config(from_dict(meta["config"]), args.scene)
-    policy_dir = os.path.join(args.run_dir, "policy")
-    info = load_policy_info(policy_dir)
-    act = load_policy(policy_dir)
+    act, policy_step = _policy(args.run_dir, args.checkpoint)
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
@@ -130,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
   report = {
       "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": args.scene,
       "eps": args.eps if args.scene in ("incremental", "train") else None,
-      "trials": args.trials, "policy_step": info.get("step"), "metrics": stats,
+      "trials": args.trials, "policy_step": policy_step, "checkpoint": args.checkpoint is not None,
+      "metrics": stats,
       "per_trial": {k: v.tolist() for k, v in per_trial.items()},
       "device": str(jax.devices()[0]), "command": "python -m train.evaluate " + " ".join(argv or sys.argv[1:]),
       "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}

@@ -36,7 +36,27 @@ def load_policy(path: str, deterministic: bool = True):
     raw = ocp.StandardCheckpointer().restore(os.path.join(os.path.abspath(path), "params"))
   except Exception as e:  # orbax raises several types for missing / corrupt files
     raise ValueError(f"cannot read policy parameters in {path}: {e}") from e
-  params = serialization.from_state_dict(spec.init_policy_params(), raw)
+  return make_act(spec, serialization.from_state_dict(spec.init_policy_params(), raw), deterministic)
+
+
+def make_act(spec: NetworkSpec, params, deterministic: bool = True):
+  """A jitted act(observation) from (normalizer, policy) parameters."""
   inference = spec.make_inference_fn()(params, deterministic=deterministic)
   key = jax.random.PRNGKey(0)
   return jax.jit(lambda obs: inference(obs, key)[0])
+
+
+def load_checkpoint_policy(run_dir: str, step: int | None = None, deterministic: bool = True):
+  """(act, step) of a training checkpoint (default: the latest), e.g. of a killed run."""
+  from train.checkpoints import RunCheckpoints, policy_params  # noqa: PLC0415
+  if not os.path.isdir(os.path.join(run_dir, "checkpoints")):
+    raise FileNotFoundError(f"{run_dir} has no checkpoints/ to evaluate")
+  ckpts = RunCheckpoints(run_dir)
+  if step is not None and step not in ckpts.mgr.all_steps():
+    raise ValueError(f"no checkpoint {step} in {ckpts.dir}; there are {sorted(ckpts.mgr.all_steps())}")
+  try:
+    raw, meta = ckpts.restore(step)
+  except Exception as e:  # orbax raises several types for missing or damaged files
+    raise ValueError(f"cannot read checkpoint {step if step is not None else 'latest'} in {ckpts.dir}: {e}") from e
+  spec = NetworkSpec.from_json(meta["network"])
+  return make_act(spec, policy_params(raw, spec), deterministic), int(meta["step"])

@@ -167,7 +167,7 @@ def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   from mjx_tracks.envs.wrappers import global_stats_from_json, global_stats_to_json, wrap_for_training  # noqa: PLC0415
   from train import compat  # noqa: PLC0415
-  from train.checkpoints import RunCheckpoints, export_policy, restore_ppo_params  # noqa: PLC0415
+  from train.checkpoints import RunCheckpoints, export_policy, policy_params, restore_ppo_params  # noqa: PLC0415
   from train.networks import NetworkSpec  # noqa: PLC0415
   from train.progress import Reporter  # noqa: PLC0415
 
@@ -269,8 +269,7 @@ def train(plan: RunPlan, db: ExperimentDB) -> dict[str, Any]:
   except EarlyStop:
     stopped = True
   raw, meta = ckpts.restore()
-  from flax import serialization  # noqa: PLC0415
-  normalizer, policy = serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
+  normalizer, policy = policy_params(raw, spec)
   policy_dir = export_policy(plan.out_dir, normalizer, policy, spec,
                              {"task": plan.task, "algo": plan.algo, "step": meta["step"],
                               "run_id": plan.run_id, "config": plan.cfg.to_dict()})
