@@ -28,11 +28,23 @@ def _plain(tree):
   return jax.tree_util.tree_map(np.asarray, serialization.to_state_dict(tree))
 
 
+def checkpoint_dir(run_dir: str) -> str:
+  """RUN/checkpoints: where a run's checkpoints live."""
+  return os.path.join(os.path.abspath(run_dir), "checkpoints")
+
+
+def saved_steps(run_dir: str) -> list[int]:
+  """Steps of the run's complete checkpoints, ascending, read from disk without creating anything
+  (orbax names a finished step's directory by the number alone)."""
+  path = checkpoint_dir(run_dir)
+  return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []
+
+
 class RunCheckpoints:
   """The checkpoint manager of one run directory."""
 
   def __init__(self, run_dir: str):
-    self.dir = os.path.join(os.path.abspath(run_dir), "checkpoints")
+    self.dir = checkpoint_dir(run_dir)
     self.mgr = ocp.CheckpointManager(self.dir, options=ocp.CheckpointManagerOptions(max_to_keep=KEEP, create=True))
 
   def save(self, step: int, params, meta: dict[str, Any]) -> bool:

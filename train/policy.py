@@ -48,12 +48,13 @@ def make_act(spec: NetworkSpec, params, deterministic: bool = True):
 
 def load_checkpoint_policy(run_dir: str, step: int | None = None, deterministic: bool = True):
   """(act, step) of a training checkpoint (default: the latest), e.g. of a killed run."""
-  from train.checkpoints import RunCheckpoints, policy_params  # noqa: PLC0415
-  if not os.path.isdir(os.path.join(run_dir, "checkpoints")):
-    raise FileNotFoundError(f"{run_dir} has no checkpoints/ to evaluate")
+  from train.checkpoints import RunCheckpoints, checkpoint_dir, policy_params, saved_steps  # noqa: PLC0415
+  steps = saved_steps(run_dir)
+  if not steps:
+    raise FileNotFoundError(f"no checkpoint in {checkpoint_dir(run_dir)} to evaluate")
+  if step is not None and step not in steps:
+    raise ValueError(f"no checkpoint {step} in {checkpoint_dir(run_dir)}; there are {steps}")
   ckpts = RunCheckpoints(run_dir)
-  if step is not None and step not in ckpts.mgr.all_steps():
-    raise ValueError(f"no checkpoint {step} in {ckpts.dir}; there are {sorted(ckpts.mgr.all_steps())}")
   try:
     raw, meta = ckpts.restore(step)
   except Exception as e:  # orbax raises several types for missing or damaged files

@@ -63,13 +63,6 @@ def _default_preset() -> str:
 RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "early_stop_return")
 
 
-def _latest_checkpoint_step(run_dir: str) -> int | None:
-  """The newest complete checkpoint's step (orbax names finished steps by number alone)."""
-  path = os.path.join(run_dir, "checkpoints")
-  steps = [int(d) for d in os.listdir(path) if d.isdigit()] if os.path.isdir(path) else []
-  return max(steps, default=None)
-
-
 def _plan_resume(args: argparse.Namespace) -> RunPlan:
   """The plan of a run to continue; refuses options that would change it, and finished runs."""
   given = [f"--{n.replace('_', '-')}" for n in RESUME_FIXED if getattr(args, n) not in (None, [], False)]
@@ -85,10 +78,11 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   except json.JSONDecodeError as e:
     raise RunError(f"--resume {args.resume}: run.json is corrupt ({e})")
   total = meta["total_steps"] if args.steps is None else args.steps
-  done = _latest_checkpoint_step(args.resume)
-  if done is None:
-    raise RunError(f"--resume {args.resume}: no checkpoint in {os.path.join(args.resume, 'checkpoints')} "
-                   "to resume from")
+  from train.checkpoints import checkpoint_dir, saved_steps  # noqa: PLC0415  (orbax: only when resuming)
+  steps = saved_steps(args.resume)
+  if not steps:
+    raise RunError(f"--resume {args.resume}: no checkpoint in {checkpoint_dir(args.resume)} to resume from")
+  done = steps[-1]
   if done >= total:
     raise RunError(f"run {meta['run_id']} is finished ({done:,} of {meta['total_steps']:,} steps); to train "
                    f"it further: --resume {args.resume} --steps N with N > {done:,}")
