@@ -8,7 +8,7 @@ d_i = |xi_i - easy_i| in [0, Delta_i], Delta_i = xi_max_i - xi_min_i, so d = 0 i
 d = Delta the hardest configuration.
 
 Uniform:       xi_i ~ U(xi_min_i, xi_max_i); integer components ~ U{min..max}.
-Incremental, variant `difficulty` (default): paper eq. 6 in difficulty coordinates,
+Incremental, variant `difficulty` (configs/defaults.yaml): paper eq. 6 in difficulty coordinates,
                d ~ N(eps Delta, eps diag(Delta)), clipped to [0, Delta], xi = easy + d toward hard;
                eps = 0 gives the easiest configuration, eps = 1 centres on the hardest.
 Incremental, variant `paper_literal`: eq. 6 as printed,
@@ -98,14 +98,14 @@ def gaussian_moments(eps: jax.Array, r: Ranges, variant: str) -> tuple[jax.Array
   return mean, std
 
 
-def incremental(key: jax.Array, eps: jax.Array, r: Ranges, variant: str = "difficulty") -> jax.Array:
+def incremental(key: jax.Array, eps: jax.Array, r: Ranges, variant: str) -> jax.Array:
   """Incremental Gaussian sample at difficulty eps in [0, 1] (formulas in the module docstring)."""
   mean, std = gaussian_moments(eps, r, variant)
   return _finish(mean + std * jax.random.normal(key, mean.shape), r)
 
 
-def sample(key: jax.Array, eps: jax.Array, r: Ranges, sampler: str, variant: str = "difficulty") -> jax.Array:
-  """Dispatches on the (static) sampler name."""
+def sample(key: jax.Array, eps: jax.Array, r: Ranges, sampler: str, variant: str) -> jax.Array:
+  """Dispatches on the (static) sampler name; variant is the incremental one (unused by uniform)."""
   if sampler == "uniform":
     return uniform(key, r)
   if sampler == "incremental":

@@ -96,7 +96,7 @@ def test_uniform_matches_its_moments_and_integer_frequencies():
 
 def test_bad_sampler_input_fails_clearly():
   with pytest.raises(ValueError, match="unknown sampler"):
-    samplers.sample(jax.random.PRNGKey(0), 0.5, STAIRS, "gaussian")
+    samplers.sample(jax.random.PRNGKey(0), 0.5, STAIRS, "gaussian", "difficulty")
   with pytest.raises(ValueError, match="unknown incremental variant"):
     samplers.incremental(jax.random.PRNGKey(0), 0.5, STAIRS, "mine")
   with pytest.raises(ValueError, match="min"):
