@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-FIGURES = ("progress", "success", "cog_deviation", "pitch_rate", "tipped_over", "length")
-
 
 def episode_figures(sums: dict, length) -> dict[str, np.ndarray]:
   """sums: per-step metrics (mjx_tracks.envs.task_env.METRICS) summed over the episode; length in

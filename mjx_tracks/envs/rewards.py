@@ -1,8 +1,10 @@
-"""Monitor (paper Section 4.3): reward terms, termination and safety figures, all pure JAX.
+"""Rewards and termination (the paper's monitor, Section 4.3): reward terms, termination, success
+and safety figures, all pure JAX.
 
-Progress (the original's "closest distance so far" rule): dist = |p - goal| - tolerance; whenever
-dist falls below the closest distance so far, the robot earns (closest - max(dist, 0)) / d0, d0 the
-starting dist; an episode's progress rewards sum to at most 1 (the fraction of d0 covered).
+Progress (the original's "closest distance so far" rule): dist = distance from p to the goal
+(a point, or for stairs a segment across the staircase: goal +- halfwidth along y) - tolerance;
+whenever dist falls below the closest distance so far, the robot earns (closest - max(dist, 0)) / d0,
+d0 the starting dist; an episode's progress rewards sum to at most 1 (the fraction of d0 covered).
 COG deviation (ascent, while on the stairs): with r the centre of mass relative to the chassis
 origin, expressed in a frame tilted by the stair incline theta = atan(h / l) (x' along the incline,
 z' normal to it), Cx = x' - tan|theta| z' and deviation = sqrt(z'^2 + Cx^2), clipped to [0, 0.32] m.

@@ -24,15 +24,14 @@ from mjx_tracks.robots.spec import RobotSpec
 
 INCREMENT = math.pi / 10  # rad per control step, the original's flipper / arm increment
 
-# Action dimensions of each control mode (paper Section 4 and 5).
+# Action dimensions of each control mode (paper Section 4 and 5); every one but v and w names the
+# joint group it drives (robots.spec.JOINT_GROUPS).
 CONTROL_MODES: dict[str, tuple[str, ...]] = {
     "4dof": ("v", "w", "front", "rear"),
     "6dof": ("v", "w", "front_left", "front_right", "rear_left", "rear_right"),
     "8dof": ("v", "w", "front_left", "front_right", "rear_left", "rear_right", "arm_1", "arm_2"),
     "5dof_stairs": ("v", "front", "rear", "arm_1", "arm_2"),
 }
-
-# Every action dimension but v and w names the joint group it drives (robots.spec.JOINT_GROUPS).
 
 
 @dataclasses.dataclass(frozen=True)

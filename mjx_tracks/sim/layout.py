@@ -8,8 +8,8 @@ import mujoco
 import numpy as np
 
 from mjx_tracks.robots.mjcf import CHASSIS_BODY
-from scenes.world import SCENE_BOX
 from mjx_tracks.robots.spec import RobotSpec
+from scenes.world import SCENE_BOX
 
 BELTS = ("track_left", "track_right", "flipper_front_left", "flipper_front_right",
          "flipper_rear_left", "flipper_rear_right")
@@ -32,8 +32,6 @@ class Layout:
   @property
   def n_joints(self) -> int:
     return len(self.joint_qpos)
-
-
 
 
 def resolve_layout(m: mujoco.MjModel, robot: RobotSpec) -> Layout:

@@ -17,7 +17,6 @@ from mjx_tracks.sim.physics import PhysicsConfig, compile_model
 from mjx_tracks.robots.spec import RobotSpec
 from mjx_tracks.sim.tracks import TrackModel, apply_belt_contacts, aref_shift
 
-
 SPAWN_CLEARANCE = 0.005  # m, the chassis spawns this far above resting height, then settles
 
 
