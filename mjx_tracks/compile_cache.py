@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import pathlib
 
@@ -20,3 +21,28 @@ def enable() -> pathlib.Path:
   jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
   jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
   return path
+
+
+def _times_path() -> pathlib.Path:
+  return cache_dir() / "compile_seconds.json"
+
+
+def last_compile_seconds(what: str) -> float | None:
+  """How long `what` (e.g. 'ppo/gpu/4096 envs on cuda') took to compile here last time, if known."""
+  try:
+    return float(json.loads(_times_path().read_text())[what])
+  except (OSError, ValueError, KeyError, TypeError):
+    return None
+
+
+def record_compile_seconds(what: str, seconds: float) -> None:
+  """Remembers a compilation time (for the next run's estimate); never fails the caller."""
+  try:
+    path = _times_path()
+    times = json.loads(path.read_text()) if path.exists() else {}
+    times[what] = round(seconds, 1)
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(times, indent=1))
+    os.replace(tmp, path)
+  except (OSError, ValueError):
+    pass

@@ -1,18 +1,22 @@
-"""Run checkpoints (orbax) and the exported policy.
+"""Run checkpoints (orbax) of the whole training state, and the exported policy.
 
-RUN/checkpoints/<step>/ holds `params` (the algorithm's parameters as a state dict: PPO
-(normalizer, policy, value), SAC (normalizer, policy, q)) and `meta` (JSON: step, algorithm,
-network spec, curriculum state, config). Orbax writes each step to a temporary directory and
-renames it when complete, so a run killed mid-save leaves the previous checkpoint readable.
-RUN/policy/ is the export: (normalizer, policy) parameters plus policy.json, loadable without the
-trainer by `train.policy.load_policy`.
+RUN/checkpoints/<step>/ holds three items:
+- `state`: every leaf of the learner's state (parameters, optimizer moments, observation
+  normalizer, the batch of environments with the curriculum and penalty normalizer in it, RNG
+  keys, SAC's whole replay buffer), flattened to `leaf_NNNNN` arrays in tree order;
+- `params`: the (normalizer, policy) parameters, what evaluation and export need;
+- `meta` (JSON): step, algorithm, network spec, the leaves' tree paths and shapes, curriculum.
+Orbax writes each step into a temporary directory and renames it when complete, so a run killed
+mid-save leaves the previous checkpoint readable; a damaged one is skipped for the one before it.
+RUN/policy/ is the export: (normalizer, policy) plus policy.json, loadable by `train.policy`.
 """
 
 from __future__ import annotations
 
 import json
 import os
-from typing import Any
+import sys
+from typing import Any, Callable
 
 import jax
 import numpy as np
@@ -22,6 +26,11 @@ from flax import serialization
 from train.networks import NetworkSpec
 
 KEEP = 3  # checkpoints kept
+CHECKPOINT_EVERY_S = 60.0  # s of wall time between timed checkpoints (any backend)
+
+
+class CheckpointError(Exception):
+  """No readable checkpoint, or one that does not fit the run."""
 
 
 def _plain(tree):
@@ -40,19 +49,48 @@ def saved_steps(run_dir: str) -> list[int]:
   return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []
 
 
+def flatten_state(state) -> tuple[dict[str, np.ndarray], list[dict]]:
+  """Host state -> ({leaf_NNNNN: array}, [{path, shape, dtype}]) in tree order."""
+  leaves = jax.tree_util.tree_flatten_with_path(state)[0]
+  arrays = {f"leaf_{i:05d}": np.asarray(x) for i, (_, x) in enumerate(leaves) if np.size(x)}  # orbax: no empties
+  layout = [{"path": jax.tree_util.keystr(p), "shape": list(np.shape(x)), "dtype": str(np.asarray(x).dtype)}
+            for p, x in leaves]
+  return arrays, layout
+
+
+def unflatten_state(arrays: dict, layout: list[dict], target):
+  """The inverse of flatten_state onto `target`'s tree (e.g. from jax.eval_shape); a checkpoint of
+  another shape of run raises CheckpointError naming the first leaf that differs."""
+  leaves, treedef = jax.tree_util.tree_flatten_with_path(target)
+  if len(leaves) != len(layout):
+    raise CheckpointError(f"the checkpoint holds {len(layout)} arrays, this run's state {len(leaves)}")
+  out = []
+  for i, ((path, want), saved) in enumerate(zip(leaves, layout)):
+    name = f"leaf_{i:05d}"
+    x = np.asarray(arrays[name]) if name in arrays else np.zeros(saved["shape"], saved["dtype"])
+    if jax.tree_util.keystr(path) != saved["path"] or list(x.shape) != list(want.shape):
+      raise CheckpointError(f"checkpoint leaf {saved['path']} {list(x.shape)} does not fit this run's "
+                            f"{jax.tree_util.keystr(path)} {list(want.shape)}")
+    out.append(x.astype(want.dtype))
+  return jax.tree_util.tree_unflatten(treedef, out)
+
+
 class RunCheckpoints:
   """The checkpoint manager of one run directory."""
 
-  def __init__(self, run_dir: str):
+  def __init__(self, run_dir: str, keep: int = KEEP):
     self.dir = checkpoint_dir(run_dir)
-    self.mgr = ocp.CheckpointManager(self.dir, options=ocp.CheckpointManagerOptions(max_to_keep=KEEP, create=True))
+    self.mgr = ocp.CheckpointManager(self.dir, options=ocp.CheckpointManagerOptions(max_to_keep=keep, create=True))
 
-  def save(self, step: int, params, meta: dict[str, Any]) -> bool:
-    """Saves a step; a step already on disk is kept as it is (returns False)."""
+  def save(self, step: int, state, policy, meta: dict[str, Any]) -> bool:
+    """Saves a step (host state tree, (normalizer, policy), JSON meta); a step already on disk is
+    kept as it is (returns False)."""
     if step in self.mgr.all_steps():
       return False
-    self.mgr.save(step, args=ocp.args.Composite(params=ocp.args.StandardSave(_plain(params)),
-                                                meta=ocp.args.JsonSave(dict(meta, step=step))), force=True)
+    arrays, layout = flatten_state(state)
+    self.mgr.save(step, args=ocp.args.Composite(
+        state=ocp.args.StandardSave(arrays), params=ocp.args.StandardSave(_plain(policy)),
+        meta=ocp.args.JsonSave(dict(meta, step=step, layout=layout))), force=True)
     self.mgr.wait_until_finished()
     return True
 
@@ -60,7 +98,7 @@ class RunCheckpoints:
     return self.mgr.latest_step()
 
   def restore(self, step: int | None = None) -> tuple[dict, dict]:
-    """(raw params state dict, meta) of a step (default: latest)."""
+    """(raw (normalizer, policy) state dict, meta) of a step (default: latest)."""
     step = self.latest_step() if step is None else step
     if step is None:
       raise FileNotFoundError(f"no checkpoint in {self.dir}")
@@ -68,26 +106,42 @@ class RunCheckpoints:
                                                           meta=ocp.args.JsonRestore()))
     return out["params"], out["meta"]
 
+  def restore_state(self, step: int, target) -> tuple[Any, dict]:
+    """(host state shaped like target, meta) of a step."""
+    out = self.mgr.restore(step, args=ocp.args.Composite(state=ocp.args.StandardRestore(),
+                                                          meta=ocp.args.JsonRestore()))
+    meta = out["meta"]
+    return unflatten_state(jax.device_get(out["state"]), meta["layout"], target), meta
+
+  def restore_latest_good(self, target, say: Callable[[str], None] = lambda m: print(m, file=sys.stderr)):
+    """(state, meta) of the newest checkpoint that reads back whole; each damaged one newer than
+    it is reported in one line and skipped. Raises CheckpointError when none is readable."""
+    steps = sorted(self.mgr.all_steps(), reverse=True)
+    for i, step in enumerate(steps):
+      try:
+        return self.restore_state(step, target)
+      except CheckpointError:
+        raise
+      except Exception as e:  # orbax / tensorstore raise many types for damaged files
+        reason = str(e).strip().splitlines()[0][:160] if str(e).strip() else type(e).__name__
+        fallback = f"falling back to checkpoint {steps[i + 1]:,}" if i + 1 < len(steps) else "no older one"
+        say(f"warning: checkpoint {step:,} in {self.dir} is unreadable ({reason}); {fallback}")
+    raise CheckpointError(f"no readable checkpoint in {self.dir}")
+
 
 def policy_params(raw: dict, spec: NetworkSpec):
-  """(normalizer, policy) parameters from a checkpoint's raw state dict (either algorithm)."""
+  """(normalizer, policy) parameters from a checkpoint's raw `params` state dict."""
   return serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
 
 
-def restore_ppo_params(raw: dict, spec: NetworkSpec):
-  """Raw state dict -> (normalizer, policy, value) with brax's types, for ppo.train(restore_params=)."""
-  nets = spec.build()
-  normalizer, policy = spec.init_policy_params()
-  value = nets.value_network.init(jax.random.PRNGKey(0))
-  return serialization.from_state_dict((normalizer, policy, value), raw)
-
-
 def export_policy(out_dir: str, normalizer, policy, spec: NetworkSpec, info: dict[str, Any]) -> str:
-  """Writes RUN/policy/: parameters and policy.json; returns the directory."""
+  """Writes RUN/policy/ (parameters, then policy.json, each replaced whole); returns the directory."""
   path = os.path.join(os.path.abspath(out_dir), "policy")
   ckpt = ocp.StandardCheckpointer()
   ckpt.save(os.path.join(path, "params"), _plain((normalizer, policy)), force=True)
   ckpt.wait_until_finished()
-  with open(os.path.join(path, "policy.json"), "w") as f:
+  tmp = os.path.join(path, "policy.json.tmp")
+  with open(tmp, "w") as f:
     json.dump({"network": spec.to_json(), **info}, f, indent=1)
+  os.replace(tmp, os.path.join(path, "policy.json"))
   return path

@@ -52,7 +52,7 @@ STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", "progress
                 "cog_deviation_mean", "pitch_rate_mean", "tipped_rate", "success_rate")
 EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed", "crashed")
 # a run's final status -> the event that records it
-STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "killed": "interrupted",
+STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
                 "failed": "failed", "crashed": "crashed"}
 EVAL_COLUMNS = ("scene", "trial", "progress", "success", "cog_deviation", "pitch_rate",
                 "tipped_over", "length")

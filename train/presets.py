@@ -12,7 +12,7 @@ class PPOPreset:
   num_timesteps: int = 20_000_000
   unroll_length: int = 20
   batch_size: int = 256
-  num_minibatches: int = 16  # batch_size * num_minibatches must be a multiple of num_envs
+  num_minibatches: int = 16  # sequences per update: batch_size * num_minibatches (whole unrolls of num_envs)
   num_updates_per_batch: int = 4
   learning_rate: float = 3e-4
   entropy_cost: float = 1e-2
@@ -40,9 +40,11 @@ class SACPreset:
   tau: float = 0.005
   reward_scaling: float = 10.0  # brax's SAC starts at alpha = 1; scaling rewards by s acts like alpha = 1/s
   grad_updates_per_step: int = 8
+  actor_steps_per_update: int = 8  # steps of every environment per jitted update (then control returns)
   min_replay_size: int = 8192
   max_replay_size: int = 1_000_000
   hidden: tuple[int, ...] = (256, 256)
+  training_metrics_steps: int = 100_000
   num_evals: int = 10
   num_eval_envs: int = 256
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=256",)
@@ -57,15 +59,18 @@ PRESETS: dict[str, dict[str, object]] = {
         "gpu": PPOPreset(),
     },
     "sac": {
-        "cpu": SACPreset(num_envs=8, num_timesteps=1_024, batch_size=32, grad_updates_per_step=1,
+        "cpu": SACPreset(num_envs=8, num_timesteps=1_024, batch_size=32, grad_updates_per_step=1, actor_steps_per_update=4,
                          min_replay_size=64, max_replay_size=10_000, hidden=(32, 32), num_evals=2,
+                         training_metrics_steps=128,
                          num_eval_envs=8, config_overrides=()),
         "gpu": SACPreset(),
         # paper: SB3 SAC, 2 x 64 MLP, ent_coef init 0.5 (reward scale 2 with brax's alpha = 1),
         # tau 0.05, gamma 0.99, one robot, 20,000 control steps
         "paper": SACPreset(num_envs=1, num_timesteps=20_000, batch_size=256, learning_rate=3e-4,
                            discounting=0.99, tau=0.05, reward_scaling=2.0, grad_updates_per_step=1,
+                           actor_steps_per_update=50,
                            min_replay_size=100, max_replay_size=1_000_000, hidden=(64, 64),
+                           training_metrics_steps=1_000,
                            num_evals=20, num_eval_envs=10, config_overrides=()),
     },
 }

@@ -33,17 +33,17 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
 
 
 class Reporter:
-  """Called with (global step, brax metrics); prints, logs to TensorBoard and the database."""
+  """Called with (global step, metrics: episode means 'episode/...', Brax evaluation 'eval/...',
+  'training/...' losses, 'curriculum/eps'); prints, logs to TensorBoard and the database."""
 
   def __init__(self, total_steps: int, start_step: int, db=None, run_id: str | None = None,
-               tb_dir: str | None = None, eps_source=None, stream=sys.stdout, wall_offset: float = 0.0):
+               tb_dir: str | None = None, stream=sys.stdout, wall_offset: float = 0.0):
     self.total, self.start_step = total_steps, start_step
     self.db, self.run_id = db, run_id
-    self.eps_source = eps_source
     self.stream = stream
     self.session_t0 = time.time()
     self.t0 = self.session_t0 - wall_offset  # s: a resumed run's wall time continues from its checkpoint
-    self.last: tuple[float, int] | None = None
+    self.last: tuple[float, int] | None = (self.session_t0, start_step)
     self.latest: dict[str, float] = {}
     self.writer = None
     if tb_dir:
@@ -57,7 +57,7 @@ class Reporter:
       sps = (step - self.last[1]) / max(now - self.last[0], 1e-9)
     self.last = (now, step)
     fig = summarize(metrics)
-    eps = self.eps_source() if self.eps_source else None
+    eps = metrics.get("curriculum/eps")
     row = {"step": step, "wall_s": now - self.t0, "steps_per_s": sps, "eps": eps, **fig}
     if fig:
       self.latest = {k: v for k, v in row.items() if v is not None}

@@ -1,0 +1,95 @@
+"""Building a run's parts from its plan: the batched environment, the learner, the device mesh
+and the state's shardings, the compiled update, the evaluator."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import sys
+import time
+from typing import Any
+
+import jax
+from jax.sharding import NamedSharding, PartitionSpec
+
+from mjx_tracks import compile_cache
+from mjx_tracks.envs.task_env import TrackedRobotEnv
+from mjx_tracks.envs.wrappers import batched_env
+from train.algos.ppo import PPO, ppo_layout
+from train.algos.sac import SAC
+from train.mesh import BATCH, make_mesh, replicated, state_shardings
+from train.networks import NetworkSpec
+
+
+@dataclasses.dataclass(frozen=True)
+class Training:
+  """A run's built parts."""
+  plan: Any  # train.plan.RunPlan
+  mesh: Any
+  core: TrackedRobotEnv
+  learner: PPO | SAC
+  spec: NetworkSpec
+  abstract: Any  # the learner state's shapes and dtypes (jax.ShapeDtypeStruct tree)
+  shardings: Any  # the learner state's shardings
+  note: str | None  # how the preset was adapted to --num-envs, if it was
+
+
+def network_spec(plan, core: TrackedRobotEnv) -> NetworkSpec:
+  p = plan.preset
+  hidden = (p.policy_hidden, p.value_hidden) if plan.algo == "ppo" else (p.hidden, p.hidden)
+  return NetworkSpec(plan.algo, core.observation_size, core.action_size, *hidden)
+
+
+def build(plan, mesh=None) -> Training:
+  """The environment, learner and shardings of a plan (nothing is compiled yet)."""
+  mesh = make_mesh() if mesh is None else mesh
+  core = TrackedRobotEnv(plan.cfg)
+  env = batched_env(core)
+  spec = network_spec(plan, core)
+  note = None
+  if plan.algo == "ppo":
+    layout = ppo_layout(plan.preset, plan.num_envs, mesh.devices.size)
+    learner = PPO(env, spec.build(), plan.preset, layout, NamedSharding(mesh, PartitionSpec(None, BATCH)))
+    note = layout.note
+  else:
+    learner = SAC(env, spec.build(), plan.preset, plan.num_envs)
+  abstract = jax.eval_shape(learner.init, jax.random.PRNGKey(0))
+  return Training(plan, mesh, core, learner, spec, abstract, state_shardings(abstract, mesh), note)
+
+
+def init_state(t: Training, seed: int):
+  """A fresh learner state, laid out on the mesh."""
+  return jax.jit(t.learner.init, out_shardings=t.shardings)(jax.random.PRNGKey(seed))
+
+
+def compile_update(t: Training, stream=sys.stdout):
+  """The update, compiled ahead of time with the state donated; says how long it should take."""
+  what = f"{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/{t.mesh.devices.size} x {jax.default_backend()}"
+  last = compile_cache.last_compile_seconds(what)
+  guess = f"~{last:,.0f} s" if last is not None else "a minute or more"
+  print(f"compiling the training step (first run on this machine takes {guess}; "
+        "later ones read the compilation cache) ...", file=stream, flush=True)
+  t0 = time.time()
+  shaped = jax.tree_util.tree_map(lambda a, s: jax.ShapeDtypeStruct(a.shape, a.dtype, sharding=s),
+                                  t.abstract, t.shardings)
+  jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,),
+                   out_shardings=(t.shardings, replicated(t.mesh)), donate_argnums=0)
+  compiled = jitted.lower(shaped).compile()
+  seconds = time.time() - t0
+  if last is None or seconds > 5:  # a cache hit would teach a misleading estimate
+    compile_cache.record_compile_seconds(what, seconds)
+  print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)
+  return compiled
+
+
+def make_evaluator(t: Training, seed: int):
+  """Brax's evaluator on uniform scenes over the task's ranges, or None when the preset has none."""
+  p = t.plan.preset
+  if not getattr(p, "run_evals", True) or p.num_evals < 2:
+    return None
+  from brax.training import acting  # noqa: PLC0415
+  cfg = t.plan.cfg
+  eval_core = TrackedRobotEnv(dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, sampler="uniform")))
+  return acting.Evaluator(batched_env(eval_core), functools.partial(t.learner.make_policy, deterministic=True),
+                          num_eval_envs=p.num_eval_envs, episode_length=cfg.episode.max_steps,
+                          action_repeat=1, key=jax.random.PRNGKey(seed + 1))

@@ -1,0 +1,72 @@
+"""Ctrl-C and SIGTERM during training: the first asks the loop to stop after the current update
+(it then checkpoints, exports and exits 130 / 143); a second one exits at once.
+
+Signals are read by a watcher thread through `signal.set_wakeup_fd`, so they are seen at once
+even while the main thread is inside a long XLA compilation or a device computation (Python
+runs its own handlers only between bytecodes of the main thread).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import sys
+import threading
+
+EXIT_CODE = {signal.SIGINT: 130, signal.SIGTERM: 143}  # 128 + signal number, as shells report
+
+
+class StopRequest:
+  """Installed for the duration of a `with` block; `requested` is the first signal, if any."""
+
+  def __init__(self, stream=sys.stderr):
+    self.requested: int | None = None
+    self.stream = stream
+    self._old = {}
+    self._old_fd = -1
+    self._reader = self._writer = None
+
+  def __enter__(self) -> "StopRequest":
+    if threading.current_thread() is not threading.main_thread():
+      return self  # signals cannot be caught off the main thread (e.g. a test harness); nothing to do
+    self._reader, self._writer = socket.socketpair()
+    self._writer.setblocking(False)
+    for sig in EXIT_CODE:
+      self._old[sig] = signal.signal(sig, lambda *_: None)  # the watcher acts; Python must not raise
+    self._old_fd = signal.set_wakeup_fd(self._writer.fileno(), warn_on_full_buffer=False)
+    threading.Thread(target=self._watch, name="stop-request", daemon=True).start()
+    return self
+
+  def _watch(self) -> None:
+    while True:
+      try:
+        data = self._reader.recv(16)
+      except OSError:
+        return
+      if not data:
+        return
+      for signum in data:
+        self._on_signal(signum)
+
+  def _on_signal(self, signum: int) -> None:
+    if self.requested is not None:
+      print("second interrupt: exiting at once (the last checkpoint is kept)", file=self.stream, flush=True)
+      os._exit(EXIT_CODE.get(self.requested, 130))
+    self.requested = signum
+    name = signal.Signals(signum).name
+    print(f"{name}: stopping after this update to save a checkpoint and the policy "
+          "(press Ctrl-C again to quit at once)", file=self.stream, flush=True)
+
+  @property
+  def exit_code(self) -> int:
+    return EXIT_CODE.get(self.requested, 130)
+
+  def __exit__(self, *exc) -> None:
+    if self._writer is None:
+      return
+    signal.set_wakeup_fd(self._old_fd)
+    for sig, handler in self._old.items():
+      signal.signal(sig, handler)
+    self._writer.close()
+    self._reader.close()

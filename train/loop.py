@@ -1,0 +1,114 @@
+"""The training loop: one compiled update at a time, progress reports, timed checkpoints,
+evaluations, early stop and stop requests (Ctrl-C / SIGTERM) between updates."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any, Callable
+
+import jax
+import numpy as np
+
+from mjx_tracks.envs.wrappers import global_stats_to_json
+from train.algos.episodes import EpisodeAccumulator
+from train.checkpoints import RunCheckpoints
+from train.mesh import local_value, to_host
+
+
+@dataclasses.dataclass
+class Checkpointer:
+  """Saves whole-state checkpoints of a run and records them in the database."""
+  ckpts: RunCheckpoints
+  meta: dict[str, Any]  # algorithm, task, run id, network spec
+  learner: Any
+  record: Callable[[int], None]  # called with the step of each checkpoint written
+  every_s: float
+  last_t: float = dataclasses.field(default_factory=time.monotonic)
+  last_step: int | None = None
+
+  def due(self) -> bool:
+    return time.monotonic() - self.last_t >= self.every_s
+
+  def save(self, state, step: int) -> None:
+    """Checkpoints the state (unless this step is on disk already)."""
+    self.last_t = time.monotonic()
+    if step == self.last_step:
+      return
+    host = to_host(state)
+    glob = jax.tree_util.tree_map(lambda x: x[0], host.env_state.info["global"])
+    written = self.ckpts.save(step, host, self.learner.policy_params(host),
+                              {**self.meta, "global": global_stats_to_json(glob)})
+    self.last_step = step
+    if written:
+      self.record(step)
+
+
+@dataclasses.dataclass
+class LoopResult:
+  state: Any
+  step: int
+  reason: str  # "done" | "early_stop" | "interrupted"
+
+
+def _agree(stop: bool, checkpoint: bool) -> tuple[bool, bool]:
+  """Every process takes the same decisions (any process stopping stops all; process 0's clock
+  decides checkpoints)."""
+  if jax.process_count() == 1:
+    return stop, checkpoint
+  from jax.experimental import multihost_utils  # noqa: PLC0415
+  flags = multihost_utils.process_allgather(np.array([stop, checkpoint], np.int32))
+  return bool(flags[:, 0].any()), bool(flags[0, 1])
+
+
+class Loop:
+  """Runs updates from a step until a total; see `run`."""
+
+  def __init__(self, update, steps_per_update: int, checkpointer: Checkpointer, reporter,
+               report_every: int, stop, early_stop_return: float | None = None,
+               evaluate: Callable | None = None, eval_every: int | None = None):
+    self.update, self.spu = update, steps_per_update
+    self.checkpointer, self.reporter, self.stop = checkpointer, reporter, stop
+    self.report_every = max(report_every, steps_per_update)
+    self.early = early_stop_return
+    self.evaluate, self.eval_every = evaluate, eval_every
+
+  def run(self, state, step: int, total: int) -> LoopResult:
+    """Updates until `total` steps, an early stop or a stop request; the state at the end is
+    checkpointed by the caller."""
+    acc, pending = EpisodeAccumulator(), []
+    next_report, next_eval = step + self.report_every, self._next_eval(step)
+    self.checkpointer.last_t = time.monotonic()
+    reason = "done"
+    while step < total:
+      stop, ckpt = _agree(self.stop.requested is not None, self.checkpointer.due())
+      if stop:
+        reason = "interrupted"
+        break
+      if ckpt:
+        self.checkpointer.save(state, step)
+      state, metrics = self.update(state)
+      step += self.spu
+      pending.append(metrics)
+      if step >= next_report or step >= total:
+        row = self._report(step, acc, pending)
+        pending, next_report = [], next_report + self.report_every
+        if self.early is not None and row.get("return_mean", -np.inf) >= self.early:
+          reason = "early_stop"
+          break
+      if next_eval is not None and step >= next_eval:
+        self.reporter(step, self.evaluate(state))
+        next_eval = self._next_eval(step)
+    if pending:
+      self._report(step, acc, pending)
+    return LoopResult(state, step, reason)
+
+  def _next_eval(self, step: int) -> int | None:
+    if self.evaluate is None or not self.eval_every:
+      return None
+    return (step // self.eval_every + 1) * self.eval_every
+
+  def _report(self, step: int, acc: EpisodeAccumulator, pending: list) -> dict:
+    for m in pending:
+      acc.add({k: local_value(v) for k, v in m.items()})
+    return self.reporter(step, acc.take())

@@ -1,0 +1,51 @@
+"""The device mesh of a training run: the environment batch sharded over every device (of every
+process, under `jax.distributed`), everything else replicated; and moving whole states between
+the mesh and the host (for checkpoints)."""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+from jax.experimental import multihost_utils
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+BATCH = "batch"  # the mesh axis the environments are split along
+
+
+def make_mesh() -> Mesh:
+  """A one-axis mesh over all devices of all processes."""
+  return Mesh(np.array(jax.devices()), (BATCH,))
+
+
+def state_shardings(state, mesh: Mesh):
+  """Shardings for a learner state: leaves of `state.env_state` split along their first (batch)
+  axis, all others (parameters, optimizer, normalizer, replay buffer, keys) replicated."""
+  rep = NamedSharding(mesh, PartitionSpec())
+  bat = NamedSharding(mesh, PartitionSpec(BATCH))
+  shard = jax.tree_util.tree_map(lambda _: rep, state)
+  env = jax.tree_util.tree_map(lambda x: bat if np.ndim(x) else rep, state.env_state)
+  return shard.replace(env_state=env)
+
+
+def replicated(mesh: Mesh) -> NamedSharding:
+  return NamedSharding(mesh, PartitionSpec())
+
+
+def to_host(tree):
+  """A tree of global arrays -> numpy on every process (gathers shards held by other processes)."""
+  if jax.process_count() == 1:
+    return jax.device_get(tree)
+  return multihost_utils.process_allgather(tree, tiled=True)
+
+
+def from_host(tree, shardings):
+  """A tree of numpy arrays (the same on every process) -> global arrays with the given shardings."""
+  def put(x, sharding):
+    x = np.asarray(x)
+    return jax.make_array_from_callback(x.shape, sharding, lambda index: x[index])
+  return jax.tree_util.tree_map(put, tree, shardings)
+
+
+def local_value(x):
+  """A replicated global array's value, readable on any process."""
+  return np.asarray(x.addressable_data(0)) if isinstance(x, jax.Array) else np.asarray(x)

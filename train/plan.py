@@ -1,0 +1,147 @@
+"""Planning a run: task, preset, config, run directory and id from the command line, or from a
+run directory's run.json for --resume. Bad requests raise RunError before anything is written."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime
+import json
+import os
+import secrets
+from typing import Any
+
+from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
+from train.presets import get_preset
+
+EARLY_STOP_RETURN = {"up": 0.5, "down": 0.6}  # the paper's thresholds (mean return of recent episodes)
+
+
+class RunError(Exception):
+  """A bad request: reported as one line, nothing written."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RunPlan:
+  run_id: str
+  out_dir: str
+  task: str
+  algo: str
+  preset_name: str
+  preset: Any
+  seed: int
+  overrides: tuple[str, ...]
+  cfg: TaskConfig
+  total_steps: int
+  num_envs: int
+  resume: bool
+  early_stop_return: float | None
+  start_step: int = 0  # the checkpoint a resumed run continues from
+
+
+def _default_preset() -> str:
+  import jax  # noqa: PLC0415
+  return "gpu" if jax.default_backend() in ("gpu", "cuda", "rocm", "tpu") else "cpu"
+
+
+# options a resumed run takes from its run.json; giving one with --resume is refused
+RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "early_stop_return")
+
+
+def _plan_resume(args: argparse.Namespace) -> RunPlan:
+  """The plan of a run to continue; refuses options that would change it, and finished runs."""
+  given = [f"--{n.replace('_', '-')}" for n in RESUME_FIXED if getattr(args, n) not in (None, [], False)]
+  if given:
+    raise RunError(f"--resume continues a run with its own settings; drop {', '.join(given)} "
+                   "(only --steps, --db, --checkpoint-every and --keep-checkpoints may be given)")
+  meta_path = os.path.join(args.resume, "run.json")
+  if not os.path.exists(meta_path):
+    raise RunError(f"--resume {args.resume}: no run.json there; not a run directory")
+  try:
+    with open(meta_path) as f:
+      meta = json.load(f)
+  except json.JSONDecodeError as e:
+    raise RunError(f"--resume {args.resume}: run.json is corrupt ({e})")
+  total = meta["total_steps"] if args.steps is None else args.steps
+  from train.checkpoints import checkpoint_dir, saved_steps  # noqa: PLC0415  (orbax: only when resuming)
+  steps = saved_steps(args.resume)
+  if not steps:
+    raise RunError(f"--resume {args.resume}: no checkpoint in {checkpoint_dir(args.resume)} to resume from")
+  done = steps[-1]
+  if done >= total:
+    raise RunError(f"run {meta['run_id']} is finished ({done:,} of {meta['total_steps']:,} steps); to train "
+                   f"it further: --resume {args.resume} --steps N with N > {done:,}")
+  preset = dataclasses.replace(get_preset(meta["algo"], meta["preset"]), num_envs=meta["num_envs"])
+  _check_devices(meta["num_envs"])
+  return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
+                 preset, meta["seed"], tuple(meta["overrides"]), from_dict(meta["config"]), total,
+                 meta["num_envs"], True, meta.get("early_stop_return"), done)
+
+
+def _check_devices(num_envs: int) -> None:
+  """The environments must split evenly over all devices (of all processes)."""
+  import jax  # noqa: PLC0415
+  n = jax.device_count()
+  if num_envs % n:
+    raise RunError(f"--num-envs {num_envs} is not a multiple of the {n} devices; "
+                   f"use e.g. {max(n, num_envs // n * n):,}")
+
+
+def new_run_id(task: str, algo: str, seed: int) -> str:
+  """TASK-ALGO-sSEED-TIME-XXXX: the random suffix keeps runs started in the same second apart."""
+  stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+  return f"{task}-{algo}-s{seed}-{stamp}-{secrets.token_hex(2)}"
+
+
+def plan_run(args: argparse.Namespace) -> RunPlan:
+  """Resolves task, preset, config and run directory; raises RunError / ConfigError on bad input."""
+  if args.resume:
+    return _plan_resume(args)
+  if not args.task:
+    raise RunError("--task is required (or --resume DIR)")
+  algo, seed = args.algo or "ppo", 0 if args.seed is None else args.seed
+  preset_name = args.preset or _default_preset()
+  try:
+    preset = get_preset(algo, preset_name)
+  except ValueError as e:
+    raise RunError(str(e))
+  overrides = tuple(preset.config_overrides) + tuple(args.set)
+  cfg = load_config(args.task, overrides)
+  num_envs = preset.num_envs if args.num_envs is None else args.num_envs
+  if num_envs < 1:
+    raise RunError("--num-envs must be >= 1")
+  _check_devices(num_envs)
+  steps = preset.num_timesteps if args.steps is None else args.steps
+  if steps < 1:
+    raise RunError("--steps must be >= 1")
+  run_id = new_run_id(args.task, algo, seed)
+  out_dir = os.path.abspath(args.out or os.path.join("runs", run_id))
+  if os.path.exists(out_dir) and os.listdir(out_dir):
+    other = os.path.join(out_dir, "run.json")
+    what = f"run {json.load(open(other))['run_id']}" if os.path.exists(other) else "other files"
+    raise RunError(f"{out_dir} already holds {what}; use --resume {out_dir} or another --out")
+  early = None
+  if args.early_stop or args.early_stop_return is not None:
+    early = args.early_stop_return if args.early_stop_return is not None else \
+        EARLY_STOP_RETURN.get(cfg.scene.direction if cfg.scene.kind == "stairs" else "", None)
+    if early is None:
+      raise RunError("--early-stop needs --early-stop-return for this task")
+  return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
+                 cfg, steps, num_envs, False, early)
+
+
+def write_run_json(plan: RunPlan) -> None:
+  """run.json (atomically); a resumed run keeps its creation time."""
+  os.makedirs(plan.out_dir, exist_ok=True)
+  path = os.path.join(plan.out_dir, "run.json")
+  now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+  created = json.load(open(path)).get("created", now) if plan.resume and os.path.exists(path) else now
+  meta = {"run_id": plan.run_id, "task": plan.task, "algo": plan.algo, "preset": plan.preset_name,
+          "seed": plan.seed, "overrides": list(plan.overrides), "config": plan.cfg.to_dict(),
+          "total_steps": plan.total_steps, "num_envs": plan.num_envs,
+          "early_stop_return": plan.early_stop_return,
+          "created": created}
+  tmp = path + ".tmp"
+  with open(tmp, "w") as f:
+    json.dump(meta, f, indent=1)
+  os.replace(tmp, path)

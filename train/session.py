@@ -1,0 +1,92 @@
+"""One training session of a run: build, start or restore the state, loop, then checkpoint and
+export the policy of wherever it stopped (finished, early stop or interrupted)."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from typing import Any
+
+from train.build import Training, build, compile_update, init_state, make_evaluator
+from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, export_policy
+from train.loop import Checkpointer, Loop, LoopResult
+from train.mesh import from_host, to_host
+from train.plan import RunError, RunPlan
+from train.progress import Reporter
+
+
+@dataclasses.dataclass(frozen=True)
+class SessionOptions:
+  checkpoint_every_s: float = CHECKPOINT_EVERY_S
+  keep_checkpoints: int = KEEP
+
+
+def _start(t: Training, ckpts: RunCheckpoints) -> tuple[Any, int]:
+  """(state, step): fresh for a new run, else the newest readable checkpoint."""
+  if not t.plan.resume:
+    return init_state(t, t.plan.seed), 0
+  try:
+    host, meta = ckpts.restore_latest_good(t.abstract)
+  except CheckpointError as e:
+    raise RunError(f"--resume {t.plan.out_dir}: {e}")
+  step = int(meta["step"])
+  if step >= t.plan.total_steps:
+    raise RunError(f"run {t.plan.run_id} is finished ({step:,} of {t.plan.total_steps:,} steps)")
+  return from_host(host, t.shardings), step
+
+
+def _evaluator(t: Training):
+  """evaluate(state) -> Brax evaluation metrics, or None."""
+  ev = make_evaluator(t, t.plan.seed)
+  if ev is None:
+    return None
+  return lambda state: ev.run_evaluation(to_host(t.learner.policy_params(state)), training_metrics={})
+
+
+def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) -> tuple[Loop, Reporter]:
+  plan, p = t.plan, t.plan.preset
+  update = compile_update(t)
+  reporter = Reporter(plan.total_steps, start_step, db, plan.run_id, os.path.join(plan.out_dir, "tb"),
+                      wall_offset=db.wall_offset(plan.run_id, start_step))
+  eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
+  loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, p.training_metrics_steps, stop,
+              plan.early_stop_return, _evaluator(t), eval_every)
+  return loop, reporter
+
+
+def _finish(t: Training, result: LoopResult, checkpointer: Checkpointer) -> str:
+  """Checkpoints the final state and exports its policy; returns the policy directory."""
+  checkpointer.save(result.state, result.step)
+  normalizer, policy = to_host(t.learner.policy_params(result.state))
+  plan = t.plan
+  return export_policy(plan.out_dir, normalizer, policy, t.spec,
+                       {"task": plan.task, "algo": plan.algo, "step": result.step, "run_id": plan.run_id,
+                        "config": plan.cfg.to_dict()})
+
+
+def train(plan: RunPlan, db, stop, options: SessionOptions = SessionOptions()) -> dict[str, Any]:
+  """Trains until the plan's total steps, an early stop or a stop request; returns the summary."""
+  t = build(plan)
+  if t.note:
+    print(f"note: {t.note}", flush=True)
+  ckpts = RunCheckpoints(plan.out_dir, options.keep_checkpoints)
+  state, step = _start(t, ckpts)
+  meta = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": t.spec.to_json()}
+  checkpointer = Checkpointer(ckpts, meta, t.learner, lambda s: db.set_checkpoint(plan.run_id, ckpts.dir, s),
+                              options.checkpoint_every_s)
+  checkpointer.last_step = step if plan.resume else None
+  loop, reporter = _loop(t, db, stop, checkpointer, step)
+  try:
+    result = loop.run(state, step, plan.total_steps)
+    policy_dir = _finish(t, result, checkpointer)
+  finally:
+    reporter.close()
+  return {"step": result.step, "reason": result.reason, "policy": policy_dir, **reporter.latest}
+
+
+def device_summary() -> str:
+  """e.g. '2 x gpu (2 processes)'."""
+  import jax  # noqa: PLC0415
+  procs = f", {jax.process_count()} processes" if jax.process_count() > 1 else ""
+  return f"{jax.device_count()} x {jax.default_backend()}{procs}"
+
