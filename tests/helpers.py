@@ -11,3 +11,30 @@ def run_id(out: str) -> str:
   """The run id recorded in a run directory."""
   with open(os.path.join(out, "run.json")) as f:
     return json.load(f)["run_id"]
+
+TRAIN_TINY = ["--task", "asc-inc-cog", "--preset", "cpu", *TINY]  # the ppo_run fixture's run, less its length
+
+
+def start_training(args: list[str], log_path: str, env: dict | None = None):
+  """`python -m train.run ARGS` in a subprocess on the CPU, its output in log_path."""
+  import subprocess  # noqa: PLC0415
+  import sys  # noqa: PLC0415
+  root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+  log = open(log_path, "w")
+  return subprocess.Popen([sys.executable, "-m", "train.run", *args], cwd=root, stdout=log,
+                          stderr=subprocess.STDOUT, env={**os.environ, "JAX_PLATFORMS": "cpu", **(env or {})})
+
+
+def wait_for(predicate, proc, timeout_s: float, what: str) -> None:
+  """Polls predicate() every 20 ms; fails if the process ends first or time runs out."""
+  import time  # noqa: PLC0415
+  t_end = time.time() + timeout_s
+  while not predicate():
+    assert proc.poll() is None, f"the run ended (rc {proc.returncode}) before {what}"
+    assert time.time() < t_end, f"no {what} within {timeout_s} s"
+    time.sleep(0.02)
+
+
+def checkpoint_steps(out: str) -> list[int]:
+  path = os.path.join(out, "checkpoints")
+  return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []

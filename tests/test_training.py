@@ -11,7 +11,7 @@ import jax
 import numpy as np
 import pytest
 
-from helpers import TINY, run_id
+from helpers import TINY, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
 from train import db as dbmod
 from train import evaluate, run
 from train.checkpoints import RunCheckpoints
@@ -21,7 +21,7 @@ from train.checkpoints import RunCheckpoints
 def ppo_run(tmp_path_factory):
   root = tmp_path_factory.mktemp("runs")
   out, database = str(root / "ppo"), str(root / "db.sqlite")
-  rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "1024", "--out", out,
+  rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", out,
                  "--db", database, *TINY])
   assert rc == 0
   return out, database
@@ -30,7 +30,7 @@ def ppo_run(tmp_path_factory):
 def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):
   out, database = ppo_run
   steps = RunCheckpoints(out).mgr.all_steps()
-  assert steps and max(steps) >= 1024
+  assert steps and max(steps) == 2048
   assert os.path.exists(os.path.join(out, "policy", "policy.json"))
   assert glob.glob(os.path.join(out, "tb", "events.out.tfevents.*"))
   d = dbmod.ExperimentDB(database)
@@ -82,6 +82,41 @@ def test_resume_continues_from_the_saved_step_and_curriculum(ppo_run, tmp_path):
   events = [e["event"] for e in d.events(rid)]
   assert events[0] == "started" and "resumed" in events and events[-1] == "finished"
   assert "checkpoint" in events and d.run(rid)["total_steps"] == before_step + 1024
+
+
+def _corrupt(step_dir: str) -> None:
+  """Overwrites every file of a checkpoint's state with garbage of the same size."""
+  for root, _, files in os.walk(os.path.join(step_dir, "state")):
+    for name in files:
+      path = os.path.join(root, name)
+      with open(path, "r+b") as f:
+        f.write(b"\xff" * max(os.path.getsize(path), 1))
+
+
+def test_sigkill_then_resume_continues_bit_for_bit_past_a_corrupt_checkpoint(ppo_run, tmp_path, capsys):
+  """A run checkpointing after every update is SIGKILLed once it has two checkpoints past 0; its
+  newest is damaged; the resume falls back to the one before, and its next updates give exactly
+  the state of the uninterrupted run (the fixture, same seed) at 2048 steps (512 per update)."""
+  reference, database = ppo_run
+  out = str(tmp_path / "killed")
+  proc = start_training([*TRAIN_TINY, "--steps", "1000000", "--checkpoint-every", "0", "--out", out,
+                         "--db", database], str(tmp_path / "log"))
+  wait_for(lambda: len([s for s in checkpoint_steps(out) if s > 0]) >= 2, proc, 300, "two checkpoints")
+  proc.kill()
+  proc.wait(30)
+  steps = checkpoint_steps(out)
+  assert steps[-1] < 2048, steps
+  _corrupt(os.path.join(out, "checkpoints", str(steps[-1])))
+  assert run.main(["--resume", out, "--steps", "2048", "--db", database]) == 0
+  err = capsys.readouterr().err
+  assert f"checkpoint {steps[-1]:,} in" in err and f"falling back to checkpoint {steps[-2]:,}" in err
+  resumed = RunCheckpoints(out).arrays(2048)
+  uninterrupted = RunCheckpoints(reference).arrays(2048)
+  assert resumed.keys() == uninterrupted.keys() and len(resumed) > 100
+  for k in resumed:
+    np.testing.assert_array_equal(np.asarray(resumed[k]), np.asarray(uninterrupted[k]), err_msg=k)
+  events = [e["event"] for e in dbmod.ExperimentDB(database).events(run_id(out))]
+  assert events[0] == "started" and "crashed" in events and events[-2:] == ["checkpoint", "finished"]
 
 
 def test_evaluation_writes_a_valid_report(ppo_run, tmp_path):
@@ -224,5 +259,5 @@ def test_a_resume_drops_the_rows_past_its_checkpoint_and_records_the_crash(tmp_p
   assert [(e["event"], e["step"]) for e in d.events("r")] == [
       ("started", 0), ("checkpoint", 3), ("crashed", None), ("resumed", 3)]
   assert d.run("r")["total_steps"] == 20
-  d.finish("r", "killed", {}, 4)
+  d.finish("r", "interrupted", {}, 4)
   assert d.events("r")[-1]["event"] == "interrupted"

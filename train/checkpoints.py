@@ -106,6 +106,11 @@ class RunCheckpoints:
                                                           meta=ocp.args.JsonRestore()))
     return out["params"], out["meta"]
 
+  def arrays(self, step: int) -> dict[str, np.ndarray]:
+    """The raw `leaf_NNNNN` arrays of a step's state (e.g. to compare two runs)."""
+    out = self.mgr.restore(step, args=ocp.args.Composite(state=ocp.args.StandardRestore()))
+    return {k: np.asarray(v) for k, v in out["state"].items()}
+
   def restore_state(self, step: int, target) -> tuple[Any, dict]:
     """(host state shaped like target, meta) of a step."""
     out = self.mgr.restore(step, args=ocp.args.Composite(state=ocp.args.StandardRestore(),

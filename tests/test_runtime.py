@@ -1,0 +1,107 @@
+"""The training runtime on the CPU: SIGTERM / Ctrl-C stop with a checkpoint and the policy, a
+second Ctrl-C quits at once, concurrent starts, and 2 CPU devices training like one."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from helpers import TINY, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
+from train import db as dbmod
+from train.checkpoints import RunCheckpoints
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_sigterm_stops_after_an_update_with_checkpoint_policy_and_exit_143(tmp_path):
+  out, database = str(tmp_path / "run"), str(tmp_path / "db.sqlite")
+  log = str(tmp_path / "log")
+  proc = start_training([*TRAIN_TINY, "--steps", "1000000", "--out", out, "--db", database], log)
+  wait_for(lambda: "[train]" in open(log).read(), proc, 300, "progress line")
+  proc.send_signal(signal.SIGTERM)
+  assert proc.wait(120) == 143
+  text = open(log).read()
+  assert f"continue with: python -m train.run --resume {out}" in text
+  steps = checkpoint_steps(out)
+  assert steps and 0 < steps[-1] < 1_000_000
+  policy = json.load(open(os.path.join(out, "policy", "policy.json")))
+  assert policy["step"] == steps[-1]
+  d = dbmod.ExperimentDB(database)
+  assert d.run(run_id(out))["status"] == "interrupted"
+  assert [e["event"] for e in d.events(run_id(out))][-2:] == ["checkpoint", "interrupted"]
+
+
+_WAITER = """
+import sys, time
+from train.interrupts import StopRequest
+with StopRequest() as stop:
+  print("ready", flush=True)
+  t = time.time()
+  while time.time() - t < 60 and stop.requested is None:
+    time.sleep(0.01)
+  print("requested", stop.requested, stop.exit_code, flush=True)
+  time.sleep(60)
+"""
+
+
+def test_a_second_ctrl_c_quits_at_once():
+  proc = subprocess.Popen([sys.executable, "-c", _WAITER], cwd=ROOT, stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True)
+  assert proc.stdout.readline().strip() == "ready"
+  proc.send_signal(signal.SIGINT)
+  assert proc.stdout.readline().startswith("SIGINT: stopping after this update")
+  assert proc.stdout.readline().split() == ["requested", str(int(signal.SIGINT)), "130"]
+  assert proc.poll() is None  # the first Ctrl-C only asks
+  t = time.time()
+  proc.send_signal(signal.SIGINT)
+  assert proc.wait(10) == 130 and time.time() - t < 5
+  assert "second interrupt: exiting at once" in proc.stdout.read()
+
+
+_PLAN_AND_START = """
+import sys
+from train import run
+from train.plan import plan_run, write_run_json
+plan = plan_run(run.parser().parse_args(["--task", "asc-inc-cog", "--preset", "cpu", "--seed", "3"]))
+run._start_records(plan, sys.argv[1])
+print(plan.run_id)
+"""
+
+
+def test_simultaneous_starts_of_the_same_task_and_seed_get_their_own_runs(tmp_path):
+  database = str(tmp_path / "db.sqlite")
+  procs = [subprocess.Popen([sys.executable, "-c", _PLAN_AND_START, database], cwd=str(tmp_path),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "JAX_PLATFORMS": "cpu", "PYTHONPATH": ROOT}) for _ in range(2)]
+  outs = [p.communicate(timeout=120) for p in procs]
+  assert all(p.returncode == 0 for p in procs), outs
+  ids = [o[0].split()[-1] for o in outs]
+  assert ids[0] != ids[1]
+  runs = dbmod.ExperimentDB(database).runs()
+  assert sorted(r["run_id"] for r in runs) == sorted(ids)
+  assert all(os.path.exists(os.path.join(tmp_path, "runs", i, "run.json")) for i in ids)
+
+
+def test_two_cpu_devices_train_like_one(tmp_path):
+  """The same run on a mesh of 2 CPU devices and on 1: integers (RNG keys, counters, the
+  curriculum's counts) equal, floats equal up to summation order (which Adam's sign-like first
+  steps amplify to ~2 x learning rate on near-zero gradients, and the rollouts then a little more)."""
+  finals = []
+  for devices in (1, 2):
+    out = str(tmp_path / f"d{devices}")
+    proc = start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", str(tmp_path / "db.sqlite")],
+                          out + ".log", {"XLA_FLAGS": f"--xla_force_host_platform_device_count={devices}"})
+    assert proc.wait(600) == 0, open(out + ".log").read()[-2000:]
+    assert f"on {devices} x cpu" in open(out + ".log").read()
+    finals.append(RunCheckpoints(out).arrays(512))
+  one, two = finals
+  assert one.keys() == two.keys()
+  for k in one:
+    if one[k].dtype.kind == "f":
+      np.testing.assert_allclose(two[k], one[k], rtol=5e-2, atol=5e-3, err_msg=k)
+    else:
+      np.testing.assert_array_equal(two[k], one[k], err_msg=k)
