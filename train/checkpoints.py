@@ -37,6 +37,13 @@ def _plain(tree):
   return jax.tree_util.tree_map(np.asarray, serialization.to_state_dict(tree))
 
 
+def _solo() -> ocp.options.MultiprocessingOptions:
+  """Orbax acting for this process alone: under jax.distributed only process 0 writes (what it
+  writes is gathered from all processes first) and every process reads on its own, without barriers."""
+  me = jax.process_index()
+  return ocp.options.MultiprocessingOptions(primary_host=me, active_processes={me})
+
+
 def checkpoint_dir(run_dir: str) -> str:
   """RUN/checkpoints: where a run's checkpoints live."""
   return os.path.join(os.path.abspath(run_dir), "checkpoints")
@@ -80,7 +87,8 @@ class RunCheckpoints:
 
   def __init__(self, run_dir: str, keep: int = KEEP):
     self.dir = checkpoint_dir(run_dir)
-    self.mgr = ocp.CheckpointManager(self.dir, options=ocp.CheckpointManagerOptions(max_to_keep=keep, create=True))
+    self.mgr = ocp.CheckpointManager(self.dir, options=ocp.CheckpointManagerOptions(
+        max_to_keep=keep, create=True, multiprocessing_options=_solo()))
 
   def save(self, step: int, state, policy, meta: dict[str, Any]) -> bool:
     """Saves a step (host state tree, (normalizer, policy), JSON meta); a step already on disk is
@@ -142,7 +150,7 @@ def policy_params(raw: dict, spec: NetworkSpec):
 def export_policy(out_dir: str, normalizer, policy, spec: NetworkSpec, info: dict[str, Any]) -> str:
   """Writes RUN/policy/ (parameters, then policy.json, each replaced whole); returns the directory."""
   path = os.path.join(os.path.abspath(out_dir), "policy")
-  ckpt = ocp.StandardCheckpointer()
+  ckpt = ocp.StandardCheckpointer(multiprocessing_options=_solo())
   ckpt.save(os.path.join(path, "params"), _plain((normalizer, policy)), force=True)
   ckpt.wait_until_finished()
   tmp = os.path.join(path, "policy.json.tmp")

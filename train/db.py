@@ -183,6 +183,18 @@ class ExperimentDB:
       return [dict(r) for r in c.execute("SELECT * FROM evals WHERE run_id=? ORDER BY scene, trial", (run_id,))]
 
 
+class NullDB:
+  """The records of a run's other processes under jax.distributed: process 0 keeps them."""
+
+  def start(self, *args, **kwargs) -> None: ...
+  def finish(self, *args, **kwargs) -> None: ...
+  def set_checkpoint(self, *args, **kwargs) -> None: ...
+  def log_stats(self, *args, **kwargs) -> None: ...
+
+  def wall_offset(self, run_id: str, step: int) -> float:
+    return 0.0
+
+
 def default_path(out_root: str = DEFAULT_ROOT) -> str:
   return os.path.join(out_root, DEFAULT_NAME)
 

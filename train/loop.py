@@ -35,7 +35,10 @@ class Checkpointer:
     self.last_t = time.monotonic()
     if step == self.last_step:
       return
-    host = to_host(state)
+    host = to_host(state)  # every process takes part in the gather; process 0 writes
+    if jax.process_index() != 0:
+      self.last_step = step
+      return
     glob = jax.tree_util.tree_map(lambda x: x[0], host.env_state.info["global"])
     written = self.ckpts.save(step, host, self.learner.policy_params(host),
                               {**self.meta, "global": global_stats_to_json(glob)})

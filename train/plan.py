@@ -88,9 +88,21 @@ def _check_devices(num_envs: int) -> None:
 
 
 def new_run_id(task: str, algo: str, seed: int) -> str:
-  """TASK-ALGO-sSEED-TIME-XXXX: the random suffix keeps runs started in the same second apart."""
+  """TASK-ALGO-sSEED-TIME-XXXX: the random suffix keeps runs started in the same second apart;
+  under jax.distributed every process takes process 0's."""
   stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-  return f"{task}-{algo}-s{seed}-{stamp}-{secrets.token_hex(2)}"
+  return _shared(f"{task}-{algo}-s{seed}-{stamp}-{secrets.token_hex(2)}")
+
+
+def _shared(text: str, size: int = 256) -> str:
+  """Process 0's value of a short string, on every process."""
+  import jax  # noqa: PLC0415
+  if jax.process_count() == 1:
+    return text
+  import numpy as np  # noqa: PLC0415
+  from jax.experimental import multihost_utils  # noqa: PLC0415
+  data = np.frombuffer(text.encode().ljust(size, b" "), np.uint8)
+  return bytes(np.asarray(multihost_utils.broadcast_one_to_all(data))).decode().strip()
 
 
 def plan_run(args: argparse.Namespace) -> RunPlan:

@@ -51,13 +51,19 @@ def parser() -> argparse.ArgumentParser:
                  help=f"wall time between checkpoints (default {CHECKPOINT_EVERY_S:g} s)")
   p.add_argument("--keep-checkpoints", type=int, default=KEEP, metavar="K",
                  help=f"checkpoints kept (default {KEEP})")
-  p.add_argument("--distributed", action="store_true",
-                 help="one process of a multi-process run: calls jax.distributed.initialize() "
-                      "(coordinator, process count and id from the JAX_* environment or the cluster)")
+  p.add_argument("--coordinator", metavar="HOST:PORT",
+                 help="one process of a multi-process run (jax.distributed): process 0's address")
+  p.add_argument("--num-processes", type=int, help="with --coordinator: how many processes")
+  p.add_argument("--process-id", type=int, help="with --coordinator: this process's index, 0 ... N-1")
   return p
 
 
-def _start_records(plan: RunPlan, db_path: str | None) -> ExperimentDB:
+def _start_records(plan: RunPlan, db_path: str | None):
+  """run.json and the database rows; under jax.distributed only process 0 keeps records."""
+  import jax  # noqa: PLC0415
+  if jax.process_index() != 0:
+    from train.db import NullDB  # noqa: PLC0415
+    return NullDB()
   write_run_json(plan)
   db = ExperimentDB(db_path or default_path(os.path.dirname(plan.out_dir)))
   db.start(plan.run_id, plan.task, plan.algo, plan.preset_name, plan.seed, plan.cfg.to_dict(),
@@ -106,9 +112,12 @@ def main(argv: list[str] | None = None) -> int:
     return 2
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
-  if args.distributed:
+  if args.coordinator:
+    if args.num_processes is None or args.process_id is None:
+      print("error: --coordinator needs --num-processes and --process-id", file=sys.stderr)
+      return 2
     import jax  # noqa: PLC0415
-    jax.distributed.initialize()
+    jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
   try:
     plan = plan_run(args)
   except (RunError, ConfigError) as e:

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import sys
 from typing import Any
+
+import jax
 
 from train.build import Training, build, compile_update, init_state, make_evaluator
 from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, export_policy
@@ -46,7 +49,10 @@ def _evaluator(t: Training):
 def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) -> tuple[Loop, Reporter]:
   plan, p = t.plan, t.plan.preset
   update = compile_update(t)
-  reporter = Reporter(plan.total_steps, start_step, db, plan.run_id, os.path.join(plan.out_dir, "tb"),
+  primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
+  reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,
+                      os.path.join(plan.out_dir, "tb") if primary else None,
+                      stream=sys.stdout if primary else open(os.devnull, "w"),
                       wall_offset=db.wall_offset(plan.run_id, start_step))
   eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
   loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, p.training_metrics_steps, stop,
@@ -59,6 +65,8 @@ def _finish(t: Training, result: LoopResult, checkpointer: Checkpointer) -> str:
   checkpointer.save(result.state, result.step)
   normalizer, policy = to_host(t.learner.policy_params(result.state))
   plan = t.plan
+  if jax.process_index() != 0:
+    return os.path.join(plan.out_dir, "policy")
   return export_policy(plan.out_dir, normalizer, policy, t.spec,
                        {"task": plan.task, "algo": plan.algo, "step": result.step, "run_id": plan.run_id,
                         "config": plan.cfg.to_dict()})

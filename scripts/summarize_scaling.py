@@ -1,0 +1,48 @@
+"""Training throughput per GPU count from gpu_scaling.sh's run databases: steps/s over the
+reports after the first (so compilation and the first report interval are excluded).
+
+    python scripts/summarize_scaling.py results/runtime-scaling
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import os
+import sqlite3
+import sys
+
+
+def throughput(db_path: str) -> dict:
+  """Steps/s between the first and last statistics row of the run in a database."""
+  with sqlite3.connect(db_path) as c:
+    rows = c.execute("SELECT step, wall_s FROM stats ORDER BY step").fetchall()
+  if len(rows) < 2:
+    raise SystemExit(f"{db_path}: fewer than 2 statistics rows")
+  (s0, w0), (s1, w1) = rows[0], rows[-1]
+  return {"steps_per_s": (s1 - s0) / (w1 - w0), "from_step": s0, "to_step": s1, "seconds": w1 - w0}
+
+
+def main(folder: str) -> None:
+  out = {}
+  for path in sorted(glob.glob(os.path.join(folder, "*.sqlite"))):
+    out[os.path.basename(path)[:-7]] = throughput(path)
+  base = out.get("g1", {}).get("steps_per_s")
+  lines = ["| run | steps/s | speed-up vs 1 GPU | steps measured |", "|---|---:|---:|---:|"]
+  for name, r in out.items():
+    r["speedup"] = r["steps_per_s"] / base if base else None
+    sp = f"{r['speedup']:.2f}x" if base else "-"
+    lines.append(f"| {name} | {r['steps_per_s']:,.0f} | {sp} | {r['from_step']:,} -> {r['to_step']:,} |")
+  logs = sorted(glob.glob(os.path.join(folder, "g*.log")))
+  header = open(logs[0]).read().splitlines()[1] if logs else ""
+  with open(os.path.join(folder, "scaling.json"), "w") as f:
+    json.dump({"runs": out, "device": header}, f, indent=1)
+  with open(os.path.join(folder, "scaling.md"), "w") as f:
+    f.write(f"Training throughput (weak scaling, 4,096 robots per GPU). {header}\n"
+            f"Command: `bash scripts/gpu_scaling.sh`, then `python scripts/summarize_scaling.py {folder}`.\n\n")
+    f.write("\n".join(lines) + "\n")
+  print("\n".join(lines))
+
+
+if __name__ == "__main__":
+  main(sys.argv[1])
