@@ -1,5 +1,5 @@
-"""Training throughput per GPU count from gpu_scaling.sh's run databases: steps/s over the
-reports after the first (so compilation and the first report interval are excluded).
+"""Training throughput per GPU count from gpu_scaling.sh's run databases: the median of the
+loop's steps/s over the reports after the first (compilation, evaluations and checkpoints excluded).
 
     python scripts/summarize_scaling.py results/runtime-scaling
 """
@@ -14,13 +14,15 @@ import sys
 
 
 def throughput(db_path: str) -> dict:
-  """Steps/s between the first and last statistics row of the run in a database."""
+  """Median training steps/s of a run's reports after its first (the loop's figure: evaluation
+  and checkpoint time excluded)."""
   with sqlite3.connect(db_path) as c:
-    rows = c.execute("SELECT step, wall_s FROM stats ORDER BY step").fetchall()
+    rows = c.execute("SELECT step, steps_per_s FROM stats WHERE steps_per_s IS NOT NULL ORDER BY step").fetchall()
   if len(rows) < 2:
-    raise SystemExit(f"{db_path}: fewer than 2 statistics rows")
-  (s0, w0), (s1, w1) = rows[0], rows[-1]
-  return {"steps_per_s": (s1 - s0) / (w1 - w0), "from_step": s0, "to_step": s1, "seconds": w1 - w0}
+    raise SystemExit(f"{db_path}: fewer than 2 training reports")
+  rates = sorted(r[1] for r in rows[1:])
+  return {"steps_per_s": rates[len(rates) // 2], "from_step": rows[0][0], "to_step": rows[-1][0],
+          "reports": len(rates)}
 
 
 def main(folder: str) -> None:

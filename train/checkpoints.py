@@ -87,8 +87,9 @@ class RunCheckpoints:
 
   def __init__(self, run_dir: str, keep: int = KEEP):
     self.dir = checkpoint_dir(run_dir)
+    os.makedirs(self.dir, exist_ok=True)
     self.mgr = ocp.CheckpointManager(self.dir, options=ocp.CheckpointManagerOptions(
-        max_to_keep=keep, create=True, multiprocessing_options=_solo()))
+        max_to_keep=keep, create=False, multiprocessing_options=_solo()))
 
   def save(self, step: int, state, policy, meta: dict[str, Any]) -> bool:
     """Saves a step (host state tree, (normalizer, policy), JSON meta); a step already on disk is

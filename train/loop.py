@@ -81,7 +81,8 @@ class Loop:
     checkpointed by the caller."""
     acc, pending = EpisodeAccumulator(), []
     next_report, next_eval = step + self.report_every, self._next_eval(step)
-    self.checkpointer.last_t = time.monotonic()
+    self.checkpointer.last_t = self.mark_t = time.monotonic()
+    self.mark_step, self.paused_s = step, 0.0
     reason = "done"
     while step < total:
       stop, ckpt = _agree(self.stop.requested is not None, self.checkpointer.due())
@@ -89,7 +90,7 @@ class Loop:
         reason = "interrupted"
         break
       if ckpt:
-        self.checkpointer.save(state, step)
+        self._paused(self.checkpointer.save, state, step)
       state, metrics = self.update(state)
       step += self.spu
       pending.append(metrics)
@@ -100,7 +101,7 @@ class Loop:
           reason = "early_stop"
           break
       if next_eval is not None and step >= next_eval:
-        self.reporter(step, self.evaluate(state))
+        self.reporter(step, self._paused(self.evaluate, state))
         next_eval = self._next_eval(step)
     if pending:
       self._report(step, acc, pending)
@@ -111,7 +112,17 @@ class Loop:
       return None
     return (step // self.eval_every + 1) * self.eval_every
 
+  def _paused(self, fn, *args):
+    """fn(*args), its time left out of the training throughput."""
+    t0 = time.monotonic()
+    out = fn(*args)
+    self.paused_s += time.monotonic() - t0
+    return out
+
   def _report(self, step: int, acc: EpisodeAccumulator, pending: list) -> dict:
     for m in pending:
-      acc.add({k: local_value(v) for k, v in m.items()})
-    return self.reporter(step, acc.take())
+      acc.add({k: local_value(v) for k, v in m.items()})  # waits for the last update
+    now = time.monotonic()
+    sps = (step - self.mark_step) / max(now - self.mark_t - self.paused_s, 1e-9)
+    self.mark_t, self.mark_step, self.paused_s = now, step, 0.0
+    return self.reporter(step, {**acc.take(), "training/steps_per_s": sps})

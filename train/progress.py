@@ -43,7 +43,6 @@ class Reporter:
     self.stream = stream
     self.session_t0 = time.time()
     self.t0 = self.session_t0 - wall_offset  # s: a resumed run's wall time continues from its checkpoint
-    self.last: tuple[float, int] | None = (self.session_t0, start_step)
     self.latest: dict[str, float] = {}
     self.writer = None
     if tb_dir:
@@ -52,10 +51,7 @@ class Reporter:
 
   def __call__(self, step: int, metrics: dict[str, Any]) -> dict[str, float]:
     now = time.time()
-    sps = None
-    if self.last is not None and step > self.last[1]:
-      sps = (step - self.last[1]) / max(now - self.last[0], 1e-9)
-    self.last = (now, step)
+    sps = metrics.get("training/steps_per_s")  # the loop's: evaluation and checkpoint time excluded
     fig = summarize(metrics)
     eps = metrics.get("curriculum/eps")
     row = {"step": step, "wall_s": now - self.t0, "steps_per_s": sps, "eps": eps, **fig}
