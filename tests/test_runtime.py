@@ -86,22 +86,42 @@ def test_simultaneous_starts_of_the_same_task_and_seed_get_their_own_runs(tmp_pa
   assert all(os.path.exists(os.path.join(tmp_path, "runs", i, "run.json")) for i in ids)
 
 
-def test_two_cpu_devices_train_like_one(tmp_path):
-  """The same run on a mesh of 2 CPU devices and on 1: integers (RNG keys, counters, the
-  curriculum's counts) equal, floats equal up to summation order (which Adam's sign-like first
-  steps amplify to ~2 x learning rate on near-zero gradients, and the rollouts then a little more)."""
-  finals = []
+def _two_processes(out: str, database: str) -> list:
+  """The tiny run as 2 jax.distributed processes of one CPU device each (coordinator on localhost)."""
+  import socket
+  with socket.socket() as sock:
+    sock.bind(("localhost", 0))
+    port = sock.getsockname()[1]
+  return [start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database,
+                          "--coordinator", f"localhost:{port}", "--num-processes", "2", "--process-id", str(i)],
+                         f"{out}.p{i}.log") for i in (0, 1)]
+
+
+def test_two_cpu_devices_and_two_processes_train_like_one_device(tmp_path):
+  """The same run on 1 CPU device, on a mesh of 2, and as 2 jax.distributed processes: integers
+  (RNG keys, counters, the curriculum's counts) equal, floats equal up to summation order (which
+  Adam's sign-like first steps amplify to ~2 x learning rate on near-zero gradients, and the
+  rollouts then a little more)."""
+  database = str(tmp_path / "db.sqlite")
+  runs = {}
   for devices in (1, 2):
     out = str(tmp_path / f"d{devices}")
-    proc = start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", str(tmp_path / "db.sqlite")],
+    proc = start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database],
                           out + ".log", {"XLA_FLAGS": f"--xla_force_host_platform_device_count={devices}"})
     assert proc.wait(600) == 0, open(out + ".log").read()[-2000:]
     assert f"on {devices} x cpu" in open(out + ".log").read()
-    finals.append(RunCheckpoints(out).arrays(512))
-  one, two = finals
-  assert one.keys() == two.keys()
-  for k in one:
-    if one[k].dtype.kind == "f":
-      np.testing.assert_allclose(two[k], one[k], rtol=5e-2, atol=5e-3, err_msg=k)
-    else:
-      np.testing.assert_array_equal(two[k], one[k], err_msg=k)
+    runs[devices] = out
+  runs["2 processes"] = str(tmp_path / "p2")
+  procs = _two_processes(runs["2 processes"], database)
+  assert [p.wait(600) for p in procs] == [0, 0], open(runs["2 processes"] + ".p0.log").read()[-2000:]
+  assert "on 2 x cpu, 2 processes" in open(runs["2 processes"] + ".p0.log").read()
+  one = RunCheckpoints(runs[1]).arrays(512)
+  for name in (2, "2 processes"):
+    other = RunCheckpoints(runs[name]).arrays(512)
+    assert one.keys() == other.keys()
+    for k in one:
+      if one[k].dtype.kind == "f":
+        np.testing.assert_allclose(other[k], one[k], rtol=5e-2, atol=5e-3, err_msg=f"{name}: {k}")
+      else:
+        np.testing.assert_array_equal(other[k], one[k], err_msg=f"{name}: {k}")
+  assert len(dbmod.ExperimentDB(database).runs()) == 3  # process 1 kept no records of its own

@@ -94,6 +94,11 @@ def new_run_id(task: str, algo: str, seed: int) -> str:
   return _shared(f"{task}-{algo}-s{seed}-{stamp}-{secrets.token_hex(2)}")
 
 
+def _primary() -> bool:
+  import jax  # noqa: PLC0415
+  return jax.process_index() == 0
+
+
 def _shared(text: str, size: int = 256) -> str:
   """Process 0's value of a short string, on every process."""
   import jax  # noqa: PLC0415
@@ -128,7 +133,7 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     raise RunError("--steps must be >= 1")
   run_id = new_run_id(args.task, algo, seed)
   out_dir = os.path.abspath(args.out or os.path.join("runs", run_id))
-  if os.path.exists(out_dir) and os.listdir(out_dir):
+  if _primary() and os.path.exists(out_dir) and os.listdir(out_dir):  # process 0 may have begun it
     other = os.path.join(out_dir, "run.json")
     what = f"run {json.load(open(other))['run_id']}" if os.path.exists(other) else "other files"
     raise RunError(f"{out_dir} already holds {what}; use --resume {out_dir} or another --out")

@@ -117,6 +117,7 @@ def main(argv: list[str] | None = None) -> int:
       print("error: --coordinator needs --num-processes and --process-id", file=sys.stderr)
       return 2
     import jax  # noqa: PLC0415
+    jax.config.update("jax_cpu_collectives_implementation", "gloo")  # CPU processes talk over gloo
     jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
   try:
     plan = plan_run(args)

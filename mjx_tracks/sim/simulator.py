@@ -43,7 +43,9 @@ class Simulator:
     layout = resolve_layout(mj_model, robot)
     tracks = TrackModel.create(mj_model, layout, robot.mu_along, robot.mu_across,
                                robot.track_separation, robot.steering_efficiency)
-    return Simulator(robot, physics, mj_model, mjx.put_model(mj_model, impl="jax"), layout, tracks)
+    # this process's first device: MJX's default, jax.devices()[0], belongs to process 0 under jax.distributed
+    model = mjx.put_model(mj_model, impl="jax", device=jax.local_devices()[0])
+    return Simulator(robot, physics, mj_model, model, layout, tracks)
 
   def with_boxes(self, box_pos: jax.Array, box_size: jax.Array) -> mjx.Model:
     """The model with this environment's scene boxes (centres, half-sizes in m) swapped in."""
@@ -64,7 +66,7 @@ class Simulator:
 
   def init_data(self, pos: jax.Array, yaw: jax.Array, joint_angles: jax.Array | None = None) -> mjx.Data:
     """Data with the chassis resting at ground point pos (m) with heading yaw (rad)."""
-    d = mjx.make_data(self.model, impl="jax")
+    d = mjx.make_data(self.model, impl="jax", device=jax.local_devices()[0])
     qpos = d.qpos.at[0:3].set(pos + jnp.array([0.0, 0.0, self.robot.spawn_height + SPAWN_CLEARANCE]))
     qpos = qpos.at[3:7].set(jnp.stack([jnp.cos(yaw / 2), 0.0, 0.0, jnp.sin(yaw / 2)]))
     if joint_angles is not None:
