@@ -1,5 +1,6 @@
 """The training runtime on the CPU: SIGTERM / Ctrl-C stop with a checkpoint and the policy, a
-second Ctrl-C quits at once, concurrent starts, and 2 CPU devices training like one."""
+second Ctrl-C quits at once, concurrent starts, 2 CPU devices training like one, and (marked
+`distributed`, outside the default run: `pytest -m distributed tests`) 2 processes doing so."""
 
 import json
 import os
@@ -9,6 +10,7 @@ import sys
 import time
 
 import numpy as np
+import pytest
 
 from helpers import TINY, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
 from train import db as dbmod
@@ -97,31 +99,43 @@ def _two_processes(out: str, database: str) -> list:
                          f"{out}.p{i}.log") for i in (0, 1)]
 
 
-def test_two_cpu_devices_and_two_processes_train_like_one_device(tmp_path):
-  """The same run on 1 CPU device, on a mesh of 2, and as 2 jax.distributed processes: integers
-  (RNG keys, counters, the curriculum's counts) equal, floats equal up to summation order (which
-  Adam's sign-like first steps amplify to ~2 x learning rate on near-zero gradients, and the
-  rollouts then a little more)."""
+def _runs_match(a: str, b: str, step: int, name: str) -> None:
+  """Integers (RNG keys, counters, the curriculum's counts) equal; floats equal up to summation
+  order, which Adam's sign-like first steps amplify to ~2 x learning rate on near-zero gradients,
+  and the rollouts then a little more."""
+  one, other = RunCheckpoints(a).arrays(step), RunCheckpoints(b).arrays(step)
+  assert one.keys() == other.keys()
+  for k in one:
+    if one[k].dtype.kind == "f":
+      np.testing.assert_allclose(other[k], one[k], rtol=5e-2, atol=5e-3, err_msg=f"{name}: {k}")
+    else:
+      np.testing.assert_array_equal(other[k], one[k], err_msg=f"{name}: {k}")
+
+
+def _tiny_run(out: str, database: str, devices: int) -> None:
+  proc = start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database],
+                        out + ".log", {"XLA_FLAGS": f"--xla_force_host_platform_device_count={devices}"})
+  assert proc.wait(600) == 0, open(out + ".log").read()[-2000:]
+  assert f"on {devices} x cpu" in open(out + ".log").read()
+
+
+def test_two_cpu_devices_train_like_one(tmp_path):
+  """The same run on 1 CPU device and on a mesh of 2."""
   database = str(tmp_path / "db.sqlite")
-  runs = {}
   for devices in (1, 2):
-    out = str(tmp_path / f"d{devices}")
-    proc = start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database],
-                          out + ".log", {"XLA_FLAGS": f"--xla_force_host_platform_device_count={devices}"})
-    assert proc.wait(600) == 0, open(out + ".log").read()[-2000:]
-    assert f"on {devices} x cpu" in open(out + ".log").read()
-    runs[devices] = out
-  runs["2 processes"] = str(tmp_path / "p2")
-  procs = _two_processes(runs["2 processes"], database)
-  assert [p.wait(600) for p in procs] == [0, 0], open(runs["2 processes"] + ".p0.log").read()[-2000:]
-  assert "on 2 x cpu, 2 processes" in open(runs["2 processes"] + ".p0.log").read()
-  one = RunCheckpoints(runs[1]).arrays(512)
-  for name in (2, "2 processes"):
-    other = RunCheckpoints(runs[name]).arrays(512)
-    assert one.keys() == other.keys()
-    for k in one:
-      if one[k].dtype.kind == "f":
-        np.testing.assert_allclose(other[k], one[k], rtol=5e-2, atol=5e-3, err_msg=f"{name}: {k}")
-      else:
-        np.testing.assert_array_equal(other[k], one[k], err_msg=f"{name}: {k}")
-  assert len(dbmod.ExperimentDB(database).runs()) == 3  # process 1 kept no records of its own
+    _tiny_run(str(tmp_path / f"d{devices}"), database, devices)
+  _runs_match(str(tmp_path / "d1"), str(tmp_path / "d2"), 512, "2 devices")
+
+
+@pytest.mark.distributed
+def test_two_processes_train_like_one_device(tmp_path):
+  """The same run as 2 jax.distributed processes of one CPU device each (coordinator on
+  localhost), which train one policy; process 1 keeps no records."""
+  database = str(tmp_path / "db.sqlite")
+  _tiny_run(str(tmp_path / "d1"), database, 1)
+  out = str(tmp_path / "p2")
+  procs = _two_processes(out, database)
+  assert [p.wait(600) for p in procs] == [0, 0], open(out + ".p0.log").read()[-2000:]
+  assert "on 2 x cpu, 2 processes" in open(out + ".p0.log").read()
+  _runs_match(str(tmp_path / "d1"), out, 512, "2 processes")
+  assert len(dbmod.ExperimentDB(database).runs()) == 2

@@ -159,6 +159,7 @@ def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path,
 
 
 def test_a_failed_resume_touches_no_record(ppo_run, tmp_path, capsys):
+  """A finished run, options that would change it, and a run whose checkpoints are all damaged."""
   out, database = ppo_run
   before = open(os.path.join(out, "run.json")).read()
   status = dbmod.ExperimentDB(database).run(run_id(out))["status"]
@@ -169,6 +170,18 @@ def test_a_failed_resume_touches_no_record(ppo_run, tmp_path, capsys):
   assert "drop --task, --set" in capsys.readouterr().err
   assert open(os.path.join(out, "run.json")).read() == before
   assert dbmod.ExperimentDB(database).run(run_id(out))["status"] == status == "done"
+  # every checkpoint unreadable: one line per damaged checkpoint, one error, no record touched
+  damaged = str(tmp_path / "damaged")
+  shutil.copytree(out, damaged)
+  for step in checkpoint_steps(damaged):
+    _corrupt(os.path.join(damaged, "checkpoints", str(step)))
+  events = len(dbmod.ExperimentDB(database).events(run_id(out)))
+  assert run.main(["--resume", damaged, "--steps", "4096", "--db", database]) == 2
+  err = capsys.readouterr().err
+  assert "error: --resume" in err and "no readable checkpoint" in err
+  assert "Traceback" not in err and "Event loop is closed" not in err
+  assert open(os.path.join(damaged, "run.json")).read() == before
+  assert len(dbmod.ExperimentDB(database).events(run_id(out))) == events
 
 
 def test_a_killed_run_is_evaluated_from_its_checkpoints(ppo_run, tmp_path, capsys):

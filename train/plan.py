@@ -88,10 +88,10 @@ def _check_devices(num_envs: int) -> None:
 
 
 def new_run_id(task: str, algo: str, seed: int) -> str:
-  """TASK-ALGO-sSEED-TIME-XXXX: the random suffix keeps runs started in the same second apart;
+  """TASK-ALGO-sSEED-TIME-XXXXXX: the random suffix keeps runs started in the same second apart;
   under jax.distributed every process takes process 0's."""
   stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-  return _shared(f"{task}-{algo}-s{seed}-{stamp}-{secrets.token_hex(2)}")
+  return _shared(f"{task}-{algo}-s{seed}-{stamp}-{secrets.token_hex(3)}")
 
 
 def _primary() -> bool:

@@ -71,21 +71,26 @@ def _start_records(plan: RunPlan, db_path: str | None):
   return db
 
 
-def _train(plan: RunPlan, db: ExperimentDB, args) -> int:
-  """Runs the session and closes its records; returns the exit code."""
+def _train(plan: RunPlan, args) -> int:
+  """Prepares the run (a resume restores its checkpoint before any record is touched), starts its
+  records, trains, and closes them; returns the exit code."""
   from train.interrupts import StopRequest  # noqa: PLC0415
-  from train.session import SessionOptions, device_summary, train  # noqa: PLC0415
+  from train.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
         f"{device_summary()}, {plan.total_steps:,} steps -> {plan.out_dir}", flush=True)
-  status, final = "crashed", {}
+  options = SessionOptions(args.checkpoint_every, args.keep_checkpoints)
   with StopRequest() as stop:
     try:
-      final = train(plan, db, stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints))
-      status = STATUS[final["reason"]]
+      prepared = prepare(plan, options)
     except RunError as e:
-      status = "failed"
       print(f"error: {e}", file=sys.stderr)
       return 2
+    plan = prepared.t.plan
+    db = _start_records(plan, args.db)
+    status, final = "crashed", {}
+    try:
+      final = train(prepared, db, stop, options)
+      status = STATUS[final["reason"]]
     finally:
       db.finish(plan.run_id, status, final, final.get("step"), _detail(status, stop))
   if status == "interrupted":
@@ -124,8 +129,17 @@ def main(argv: list[str] | None = None) -> int:
   except (RunError, ConfigError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
-  return _train(plan, _start_records(plan, args.db), args)
+  return _train(plan, args)
+
+
+def _main(argv: list[str] | None = None) -> int:
+  """main, with a Ctrl-C before the run starts reported in one line."""
+  try:
+    return main(argv)
+  except KeyboardInterrupt:
+    print("interrupted before training started; nothing to resume", file=sys.stderr)
+    return 130
 
 
 if __name__ == "__main__":
-  sys.exit(main())
+  sys.exit(_main())

@@ -24,10 +24,28 @@ class SessionOptions:
   keep_checkpoints: int = KEEP
 
 
-def _start(t: Training, ckpts: RunCheckpoints) -> tuple[Any, int]:
-  """(state, step): fresh for a new run, else the newest readable checkpoint."""
-  if not t.plan.resume:
-    return init_state(t, t.plan.seed), 0
+@dataclasses.dataclass(frozen=True)
+class Prepared:
+  """A run ready to train: built, with its first state (fresh or restored)."""
+  t: Training
+  state: Any
+  step: int
+
+
+def prepare(plan: RunPlan, options: SessionOptions = SessionOptions()) -> Prepared:
+  """Builds the run and makes or restores its state; raises RunError (nothing written) when no
+  checkpoint of a resumed run is readable. The plan's start_step becomes the step restored."""
+  t = build(plan)
+  if t.note:
+    print(f"note: {t.note}", flush=True)
+  if not plan.resume:
+    return Prepared(t, init_state(t, plan.seed), 0)
+  state, step = _restore(t, RunCheckpoints(plan.out_dir, options.keep_checkpoints))
+  return Prepared(dataclasses.replace(t, plan=dataclasses.replace(plan, start_step=step)), state, step)
+
+
+def _restore(t: Training, ckpts: RunCheckpoints) -> tuple[Any, int]:
+  """(state, step) of the newest readable checkpoint."""
   try:
     host, meta = ckpts.restore_latest_good(t.abstract)
   except CheckpointError as e:
@@ -72,13 +90,11 @@ def _finish(t: Training, result: LoopResult, checkpointer: Checkpointer) -> str:
                         "config": plan.cfg.to_dict()})
 
 
-def train(plan: RunPlan, db, stop, options: SessionOptions = SessionOptions()) -> dict[str, Any]:
+def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions()) -> dict[str, Any]:
   """Trains until the plan's total steps, an early stop or a stop request; returns the summary."""
-  t = build(plan)
-  if t.note:
-    print(f"note: {t.note}", flush=True)
+  t, state, step = prepared.t, prepared.state, prepared.step
+  plan = t.plan
   ckpts = RunCheckpoints(plan.out_dir, options.keep_checkpoints)
-  state, step = _start(t, ckpts)
   meta = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": t.spec.to_json()}
   checkpointer = Checkpointer(ckpts, meta, t.learner, lambda s: db.set_checkpoint(plan.run_id, ckpts.dir, s),
                               options.checkpoint_every_s)
