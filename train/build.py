@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import hashlib
+import json
 import sys
 import time
 from typing import Any
@@ -64,7 +66,9 @@ def init_state(t: Training, seed: int):
 
 def compile_update(t: Training, stream=sys.stdout):
   """The update, compiled ahead of time with the state donated; says how long it should take."""
-  what = f"{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/{t.mesh.devices.size} x {jax.default_backend()}"
+  config = hashlib.sha1(json.dumps(t.plan.cfg.to_dict(), sort_keys=True).encode()).hexdigest()[:8]
+  what = (f"{t.plan.task}/{config}/{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/"
+          f"{t.mesh.devices.size} x {jax.default_backend()}")
   last = compile_cache.last_compile_seconds(what)
   guess = f"~{last:,.0f} s" if last is not None else "a minute or more"
   print(f"compiling the training step (first run on this machine takes {guess}; "
