@@ -12,6 +12,8 @@ import os
 import re
 import sys
 
+from results_table import log_header, write_summary
+
 
 def main(folder: str) -> None:
   rows = {}
@@ -32,16 +34,11 @@ def main(folder: str) -> None:
                    f"{r['train_wall_s']} |")
     mean = sum(r["success"] for r in seeds.values()) / len(seeds)
     lines.append(f"| {impl} | mean of {len(seeds)} | {mean:.2f} | | | |")
-  logs = sorted(glob.glob(os.path.join(folder, "*_train.log")))
-  head = "\n".join(open(logs[0]).read().splitlines()[:2]) if logs else ""
-  with open(os.path.join(folder, "parity.json"), "w") as f:
-    json.dump(rows, f, indent=1)
-  with open(os.path.join(folder, "parity.md"), "w") as f:
-    f.write(f"PPO parity, asc-inc-cog, gpu preset, 2,000,000 steps.\nFirst run's header:\n```\n{head}\n```\n"
-            f"Commands: `bash scripts/gpu_parity.sh`, then `python scripts/summarize_parity.py {folder}`.\n\n")
-    f.write("\n".join(lines) + "\n")
-  print("\n".join(lines))
-
+  head = log_header(folder, "*_train.log", slice(0, 2))
+  write_summary(folder, "parity",
+                f"PPO parity, asc-inc-cog, gpu preset, 2,000,000 steps.\nFirst run's header:\n```\n{head}\n```\n"
+                f"Commands: `bash scripts/gpu_parity.sh`, then `python scripts/summarize_parity.py {folder}`.\n\n",
+                lines, rows)
 
 if __name__ == "__main__":
   main(sys.argv[1])

@@ -7,10 +7,11 @@ loop's steps/s over the reports after the first (compilation, evaluations and ch
 from __future__ import annotations
 
 import glob
-import json
 import os
 import sqlite3
 import sys
+
+from results_table import log_header, write_summary
 
 
 def throughput(db_path: str) -> dict:
@@ -35,16 +36,11 @@ def main(folder: str) -> None:
     r["speedup"] = r["steps_per_s"] / base if base else None
     sp = f"{r['speedup']:.2f}x" if base else "-"
     lines.append(f"| {name} | {r['steps_per_s']:,.0f} | {sp} | {r['from_step']:,} -> {r['to_step']:,} |")
-  logs = sorted(glob.glob(os.path.join(folder, "g*.log")))
-  header = open(logs[0]).read().splitlines()[1] if logs else ""
-  with open(os.path.join(folder, "scaling.json"), "w") as f:
-    json.dump({"runs": out, "device": header}, f, indent=1)
-  with open(os.path.join(folder, "scaling.md"), "w") as f:
-    f.write(f"Training throughput (weak scaling, 4,096 robots per GPU). {header}\n"
-            f"Command: `bash scripts/gpu_scaling.sh`, then `python scripts/summarize_scaling.py {folder}`.\n\n")
-    f.write("\n".join(lines) + "\n")
-  print("\n".join(lines))
-
+  header = log_header(folder, "g*.log", slice(1, 2))
+  write_summary(folder, "scaling",
+                f"Training throughput (weak scaling, 4,096 robots per GPU). {header}\n"
+                f"Command: `bash scripts/gpu_scaling.sh`, then `python scripts/summarize_scaling.py {folder}`.\n\n",
+                lines, {"runs": out, "device": header})
 
 if __name__ == "__main__":
   main(sys.argv[1])

@@ -12,6 +12,8 @@ import json
 import os
 import re
 
+from results_table import write_summary
+
 
 def _from_log(log_path: str, pattern: str) -> str:
   text = open(log_path).read() if os.path.exists(log_path) else ""
@@ -41,10 +43,9 @@ def main(argv=None) -> int:
   args = p.parse_args(argv)
   table = ["| seed | steps asked | train wall s (with compile) | progress | success | COG deviation (m) | pitch rate (rad/s) | tip-overs | device, date |",
            "|---|---|---|---|---|---|---|---|---|", *rows(args.folder)]
-  text = "\n".join(table) + "\n"
-  with open(os.path.join(args.folder, "summary.md"), "w") as fh:
-    fh.write(f"Hardest staircase, 100 trials per seed (`python scripts/summarize_seeds.py {args.folder}`)\n\n" + text)
-  print(text, end="")
+  write_summary(args.folder, "summary",
+                f"Hardest staircase, 100 trials per seed (`python scripts/summarize_seeds.py {args.folder}`)\n\n",
+                table)
   return 0
 
 
