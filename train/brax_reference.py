@@ -34,16 +34,14 @@ def brax_kwargs(plan: RunPlan, spec) -> dict:
 
 def brax_train(plan: RunPlan, progress=lambda step, metrics: None):
   """(network spec, (normalizer, policy)) trained by Brax's train() for the plan."""
-  import dataclasses  # noqa: PLC0415
-
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   from mjx_tracks.envs.wrappers import wrap_for_training  # noqa: PLC0415
   from train import brax_compat  # noqa: PLC0415
   from train.build import network_spec  # noqa: PLC0415
+  from train.evaluate import scene_config  # noqa: PLC0415
   brax_compat.install()
   core = TrackedRobotEnv(plan.cfg)
-  eval_core = TrackedRobotEnv(dataclasses.replace(plan.cfg, scene=dataclasses.replace(plan.cfg.scene,
-                                                                                       sampler="uniform")))
+  eval_core = TrackedRobotEnv(scene_config(plan.cfg, "uniform"))
   spec = network_spec(plan, core)
   if plan.algo == "ppo":
     from brax.training.agents.ppo import train as trainer  # noqa: PLC0415

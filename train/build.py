@@ -19,6 +19,7 @@ from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
 from train.algos.ppo import PPO, ppo_layout
 from train.algos.sac import SAC
+from train.evaluate import scene_config
 from train.mesh import BATCH, make_mesh, replicated, state_shardings
 from train.networks import NetworkSpec
 
@@ -93,7 +94,7 @@ def make_evaluator(t: Training, seed: int):
     return None
   from brax.training import acting  # noqa: PLC0415
   cfg = t.plan.cfg
-  eval_core = TrackedRobotEnv(dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, sampler="uniform")))
+  eval_core = TrackedRobotEnv(scene_config(cfg, "uniform"))
   return acting.Evaluator(batched_env(eval_core), functools.partial(t.learner.make_policy, deterministic=True),
                           num_eval_envs=p.num_eval_envs, episode_length=cfg.episode.max_steps,
                           action_repeat=1, key=jax.random.PRNGKey(seed + 1))

@@ -20,7 +20,7 @@ def make_mesh() -> Mesh:
 def state_shardings(state, mesh: Mesh):
   """Shardings for a learner state: leaves of `state.env_state` split along their first (batch)
   axis, all others (parameters, optimizer, normalizer, replay buffer, keys) replicated."""
-  rep = NamedSharding(mesh, PartitionSpec())
+  rep = replicated(mesh)
   bat = NamedSharding(mesh, PartitionSpec(BATCH))
   shard = jax.tree_util.tree_map(lambda _: rep, state)
   env = jax.tree_util.tree_map(lambda x: bat if np.ndim(x) else rep, state.env_state)

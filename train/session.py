@@ -50,10 +50,7 @@ def _restore(t: Training, ckpts: RunCheckpoints) -> tuple[Any, int]:
     host, meta = ckpts.restore_latest_good(t.abstract)
   except CheckpointError as e:
     raise RunError(f"--resume {t.plan.out_dir}: {e}")
-  step = int(meta["step"])
-  if step >= t.plan.total_steps:
-    raise RunError(f"run {t.plan.run_id} is finished ({step:,} of {t.plan.total_steps:,} steps)")
-  return from_host(host, t.shardings), step
+  return from_host(host, t.shardings), int(meta["step"])  # below the total: plan_run checked the newest
 
 
 def _evaluator(t: Training):
@@ -97,8 +94,7 @@ def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions
   ckpts = RunCheckpoints(plan.out_dir, options.keep_checkpoints)
   meta = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": t.spec.to_json()}
   checkpointer = Checkpointer(ckpts, meta, t.learner, lambda s: db.set_checkpoint(plan.run_id, ckpts.dir, s),
-                              options.checkpoint_every_s)
-  checkpointer.last_step = step if plan.resume else None
+                              options.checkpoint_every_s, last_step=step if plan.resume else None)
   loop, reporter = _loop(t, db, stop, checkpointer, step)
   try:
     result = loop.run(state, step, plan.total_steps)
@@ -109,8 +105,7 @@ def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions
 
 
 def device_summary() -> str:
-  """e.g. '2 x gpu (2 processes)'."""
-  import jax  # noqa: PLC0415
+  """e.g. '2 x gpu, 2 processes'."""
   procs = f", {jax.process_count()} processes" if jax.process_count() > 1 else ""
   return f"{jax.device_count()} x {jax.default_backend()}{procs}"
 
