@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Parity of train.run's PPO with Brax's ppo.train (train.brax_reference), same preset (gpu) and
-# budget (STEPS, default 2,000,000), seeds SEEDS (default "0 1 2"); each policy is evaluated on the
+# Parity of train.run's PPO (or SAC: ALGO=sac) with Brax's ppo.train / sac.train
+# (train.brax_reference), same preset (gpu) and budget (STEPS, default 2,000,000), seeds SEEDS
+# (default "0 1 2"); each policy is evaluated on the
 # hardest staircase (100 trials). With 2 GPUs (PAIRED=1, default), GPU 0 runs ours and GPU 1 Brax's
 # side by side; with PAIRED=0 both run one after the other on GPU 0.
 # Writes $OUT/<impl>_s<seed>_{train.log,eval_hardest.json}; then
@@ -9,13 +10,14 @@ set -uo pipefail
 export PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 steps=${STEPS:-2000000}
 task=${TASK:-asc-inc-cog}
+algo=${ALGO:-ppo}
 device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1)"
 pipeline() {  # IMPL GPU: train and evaluate each seed
   local impl=$1 gpu=$2 module
   [ "$impl" = ours ] && module=train.run || module=train.brax_reference
   for seed in ${SEEDS:-0 1 2}; do
     local name=${impl}_s${seed} run=/tmp/parity/${impl}_s${seed}
-    local cmd="python3 -m $module --task $task --preset gpu --steps $steps --seed $seed --out $run"
+    local cmd="python3 -m $module --task $task --algo $algo --preset gpu --steps $steps --seed $seed --out $run"
     { echo "command: CUDA_VISIBLE_DEVICES=$gpu $cmd"; echo "device: $device, date: $(date -u +%FT%TZ)"; } > "$OUT/${name}_train.log"
     local t0=$(date +%s)
     [ "$impl" = ours ] && cmd="$cmd --db /tmp/parity/db.sqlite"

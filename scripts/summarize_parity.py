@@ -1,5 +1,5 @@
 """Parity table from gpu_parity.sh's evaluation files: success on the hardest staircase per seed,
-ours (train.run) against Brax's ppo.train, with each run's training wall time.
+ours (train.run) against Brax's ppo.train / sac.train, with each run's training wall time.
 
     python scripts/summarize_parity.py results/runtime-parity
 """
@@ -35,8 +35,10 @@ def main(folder: str) -> None:
     mean = sum(r["success"] for r in seeds.values()) / len(seeds)
     lines.append(f"| {impl} | mean of {len(seeds)} | {mean:.2f} | | | |")
   head = log_header(folder, "*_train.log", slice(0, 2))
+  command = dict(re.findall(r"--([\w-]+) (\S+)", head))
   write_summary(folder, "parity",
-                f"PPO parity, asc-inc-cog, gpu preset, 2,000,000 steps.\nFirst run's header:\n```\n{head}\n```\n"
+                f"{command.get('algo', 'ppo').upper()} parity, {command['task']}, {command['preset']} preset, "
+                f"{int(command['steps']):,} steps.\nFirst run's header:\n```\n{head}\n```\n"
                 f"Commands: `bash scripts/gpu_parity.sh`, then `python scripts/summarize_parity.py {folder}`.\n\n",
                 lines, rows)
 

@@ -20,7 +20,7 @@ from mjx_tracks.envs.wrappers import batched_env
 from train.algos.ppo import PPO, ppo_layout
 from train.algos.sac import SAC
 from train.evaluate import scene_config
-from train.mesh import BATCH, make_mesh, replicated, state_shardings
+from train.mesh import BATCH, ShardedStep, make_mesh, replicated, state_shardings
 from train.networks import NetworkSpec
 
 
@@ -47,7 +47,7 @@ def build(plan, mesh=None) -> Training:
   """The environment, learner and shardings of a plan (nothing is compiled yet)."""
   mesh = make_mesh() if mesh is None else mesh
   core = TrackedRobotEnv(plan.cfg)
-  env = batched_env(core)
+  env = ShardedStep(batched_env(core, axis_name=BATCH), mesh)
   spec = network_spec(plan, core)
   note = None
   if plan.algo == "ppo":
@@ -65,6 +65,12 @@ def init_state(t: Training, seed: int):
   return jax.jit(t.learner.init, out_shardings=t.shardings)(jax.random.PRNGKey(seed))
 
 
+def shaped_state(t: Training):
+  """The learner state as shapes, dtypes and shardings (what the update is compiled for)."""
+  return jax.tree_util.tree_map(lambda a, s: jax.ShapeDtypeStruct(a.shape, a.dtype, sharding=s),
+                                t.abstract, t.shardings)
+
+
 def compile_update(t: Training, stream=sys.stdout):
   """The update, compiled ahead of time with the state donated; says how long it should take."""
   config = hashlib.sha1(json.dumps(t.plan.cfg.to_dict(), sort_keys=True).encode()).hexdigest()[:8]
@@ -75,8 +81,7 @@ def compile_update(t: Training, stream=sys.stdout):
   print(f"compiling the training step (first run on this machine takes {guess}; "
         "later ones read the compilation cache) ...", file=stream, flush=True)
   t0 = time.time()
-  shaped = jax.tree_util.tree_map(lambda a, s: jax.ShapeDtypeStruct(a.shape, a.dtype, sharding=s),
-                                  t.abstract, t.shardings)
+  shaped = shaped_state(t)
   jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,),
                    out_shardings=(t.shardings, replicated(t.mesh)), donate_argnums=0)
   compiled = jitted.lower(shaped).compile()

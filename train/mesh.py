@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import jax
 import numpy as np
+from brax.envs.base import Wrapper
 from jax.experimental import multihost_utils
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
@@ -25,6 +26,25 @@ def state_shardings(state, mesh: Mesh):
   shard = jax.tree_util.tree_map(lambda _: rep, state)
   env = jax.tree_util.tree_map(lambda x: bat if np.ndim(x) else rep, state.env_state)
   return shard.replace(env_state=env)
+
+
+class ShardedStep(Wrapper):
+  """Runs a batched env's step on each device's own part of the batch (`jax.shard_map`).
+
+  Under plain `jax.jit` the partitioner keeps the batch as one array: every data-dependent loop
+  exit inside the step (MJX's solver iterations, its line search) is then reduced across devices,
+  a synchronisation per iteration. Here each device loops on its own robots, and only the
+  curriculum's reduction (the env built with `axis_name=BATCH`) crosses devices."""
+
+  def __init__(self, env, mesh: Mesh):
+    super().__init__(env)
+    self.mesh = mesh
+
+  def step(self, state, action):
+    specs = jax.tree_util.tree_map(lambda x: PartitionSpec(BATCH) if np.ndim(x) else PartitionSpec(), state)
+    step = jax.shard_map(self.env.step, mesh=self.mesh, in_specs=(specs, PartitionSpec(BATCH)),
+                         out_specs=specs, check_vma=False)
+    return step(state, action)
 
 
 def replicated(mesh: Mesh) -> NamedSharding:
