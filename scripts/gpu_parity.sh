@@ -2,8 +2,9 @@
 # Parity of train.run's PPO (or SAC: ALGO=sac) with Brax's ppo.train / sac.train
 # (train.brax_reference), same preset (gpu) and budget (STEPS, default 2,000,000), seeds SEEDS
 # (default "0 1 2"); each policy is evaluated on the
-# hardest staircase (100 trials). With 2 GPUs (PAIRED=1, default), GPU 0 runs ours and GPU 1 Brax's
-# side by side; with PAIRED=0 both run one after the other on GPU 0.
+# hardest staircase (100 trials). With 2 GPUs (PAIRED=1, default), the first of GPUS (default
+# "0 1") runs ours and the second Brax's, side by side; with PAIRED=0 both run one after the other
+# on the first.
 # Writes $OUT/<impl>_s<seed>_{train.log,eval_hardest.json}; then
 # `python scripts/summarize_parity.py $OUT` writes parity.md / parity.json.
 set -uo pipefail
@@ -28,11 +29,12 @@ pipeline() {  # IMPL GPU: train and evaluate each seed
   done
 }
 mkdir -p /tmp/parity
+read -r gpu_a gpu_b <<< "${GPUS:-0 1}"
 if [ "${PAIRED:-1}" = 1 ]; then
-  pipeline ours 0 &
-  pipeline brax 1
+  pipeline ours "$gpu_a" &
+  pipeline brax "$gpu_b"
   wait
 else
-  pipeline ours 0
-  pipeline brax 0
+  pipeline ours "$gpu_a"
+  pipeline brax "$gpu_a"
 fi

@@ -20,7 +20,7 @@ from mjx_tracks.envs.wrappers import batched_env
 from train.algos.ppo import PPO, ppo_layout
 from train.algos.sac import SAC
 from train.evaluate import scene_config
-from train.mesh import BATCH, ShardedStep, make_mesh, replicated, state_shardings
+from train.mesh import BATCH, ShardedStep, make_mesh, replicated, state_shardings, use_gspmd_partitioner
 from train.networks import NetworkSpec
 
 
@@ -45,6 +45,7 @@ def network_spec(plan, core: TrackedRobotEnv) -> NetworkSpec:
 
 def build(plan, mesh=None) -> Training:
   """The environment, learner and shardings of a plan (nothing is compiled yet)."""
+  use_gspmd_partitioner()
   mesh = make_mesh() if mesh is None else mesh
   core = TrackedRobotEnv(plan.cfg)
   env = ShardedStep(batched_env(core, axis_name=BATCH), mesh)
