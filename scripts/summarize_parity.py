@@ -39,7 +39,8 @@ def main(folder: str) -> None:
   write_summary(folder, "parity",
                 f"{command.get('algo', 'ppo').upper()} parity, {command['task']}, {command['preset']} preset, "
                 f"{int(command['steps']):,} steps.\nFirst run's header:\n```\n{head}\n```\n"
-                f"Commands: `bash scripts/gpu_parity.sh`, then `python scripts/summarize_parity.py {folder}`.\n\n",
+                f"Commands: `ALGO={command.get('algo', 'ppo')} STEPS={command['steps']} bash scripts/gpu_parity.sh`, "
+                f"then `python scripts/summarize_parity.py {folder}`.\n\n",
                 lines, rows)
 
 if __name__ == "__main__":

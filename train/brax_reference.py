@@ -47,7 +47,7 @@ def brax_train(plan: RunPlan, progress=lambda step, metrics: None):
     from brax.training.agents.ppo import train as trainer  # noqa: PLC0415
   else:
     from brax.training.agents.sac import train as trainer  # noqa: PLC0415
-  _, params, _ = trainer.train(environment=core, eval_env=eval_core, wrap_env_fn=wrap_for_training(core, "i"),
+  _, params, _ = trainer.train(environment=core, eval_env=eval_core, wrap_env_fn=wrap_for_training("i"),
                                progress_fn=progress, **brax_kwargs(plan, spec))
   return spec, (params[0], params[1])
 

@@ -125,11 +125,16 @@ def main(argv: list[str] | None = None) -> int:
     jax.config.update("jax_cpu_collectives_implementation", "gloo")  # CPU processes talk over gloo
     jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
   try:
-    plan = plan_run(args)
-  except (RunError, ConfigError) as e:
-    print(f"error: {e}", file=sys.stderr)
-    return 2
-  return _train(plan, args)
+    try:
+      plan = plan_run(args)
+    except (RunError, ConfigError) as e:
+      print(f"error: {e}", file=sys.stderr)
+      return 2
+    return _train(plan, args)
+  finally:
+    if args.coordinator:  # all processes leave together: no "WatchTasks failed" lines from a late one
+      import jax  # noqa: PLC0415
+      jax.distributed.shutdown()
 
 
 def _main(argv: list[str] | None = None) -> int:

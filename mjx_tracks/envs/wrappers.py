@@ -108,27 +108,29 @@ def _axis_bound(axis_name: Optional[str]) -> bool:
   return True
 
 
-def wrap_for_training(core: TrackedRobotEnv, axis_name: Optional[str] = "i",
-                      initial: Optional[GlobalStats] = None, report: Optional[Callable] = None):
-  """A `wrap_env_fn` for brax.training.agents.{ppo,sac}.train: Vmap -> Episode -> curriculum reset.
+def wrap_for_training(axis_name: Optional[str] = "i", initial: Optional[GlobalStats] = None,
+                      report: Optional[Callable] = None):
+  """A `wrap_env_fn` for brax.training.agents.{ppo,sac}.train: Vmap -> Episode -> curriculum reset
+  of the TrackedRobotEnv it is given (Brax wraps its training and evaluation envs with it, and
+  each keeps its own scenes).
 
   axis_name is Brax's pmap axis ('i'): where it is bound (training on several devices) the
   curriculum reduces across devices; where it is not (one device, evaluation) it stays local.
   """
 
-  def wrap(env, episode_length: int = 1000, action_repeat: int = 1, randomization_fn=None, **_):
+  def wrap(env: TrackedRobotEnv, episode_length: int = 1000, action_repeat: int = 1, randomization_fn=None, **_):
     if randomization_fn is not None:
       raise ValueError("mjx_tracks environments randomize their scenes themselves; "
                        "randomization_fn is not supported")
     inner = EpisodeWrapper(VmapWrapper(env), episode_length, action_repeat)
-    return CurriculumAutoReset(inner, core, axis_name, initial, report)
+    return CurriculumAutoReset(inner, env, axis_name, initial, report)
 
   return wrap
 
 
 def batched_env(core: TrackedRobotEnv, axis_name: Optional[str] = None):
   """The task's batched environment with its own episode length and curriculum reset."""
-  return wrap_for_training(core, axis_name)(core, core.cfg.episode.max_steps, 1)
+  return wrap_for_training(axis_name)(core, core.cfg.episode.max_steps, 1)
 
 
 def global_stats_to_json(g: GlobalStats) -> dict:
