@@ -22,7 +22,7 @@ def ppo_run(tmp_path_factory):
   root = tmp_path_factory.mktemp("runs")
   out, database = str(root / "ppo"), str(root / "db.sqlite")
   rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", out,
-                 "--db", database, *TINY])
+                 "--db", database, "--probe-every", "2048", *TINY])
   assert rc == 0
   return out, database
 
@@ -37,8 +37,10 @@ def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):
   row = d.run(run_id(out))
   assert row["status"] == "done" and row["task"] == "asc-inc-cog" and row["algo"] == "ppo"
   stats = d.stats(row["run_id"])
-  assert len(stats) >= 2 and all(s["return_mean"] is not None for s in stats)
-  assert any(s["eps"] is not None for s in stats)
+  assert {s["source"] for s in stats} == {"train", "hardest"}  # no Brax evaluator in the cpu preset
+  train_rows = [s for s in stats if s["source"] == "train"]
+  assert len(train_rows) >= 2 and all(s["return_mean"] is not None for s in train_rows)
+  assert any(s["eps"] is not None for s in train_rows)
 
 
 def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
@@ -75,7 +77,7 @@ def test_resume_continues_from_the_saved_step_and_curriculum(ppo_run, tmp_path):
   assert c1["finished"] > c0["finished"] > 0  # the curriculum kept counting from where it was
   d = dbmod.ExperimentDB(database)
   rid = run_id(copy)
-  steps = [r["step"] for r in d.stats(rid)]
+  steps = [(r["source"], r["step"]) for r in d.stats(rid)]
   assert len(steps) == len(set(steps))  # the resumed part replaced, not duplicated, its rows
   walls = [r["wall_s"] for r in d.stats(rid)]
   assert walls == sorted(walls)  # wall time accumulates across the resume
@@ -119,17 +121,24 @@ def test_sigkill_then_resume_continues_bit_for_bit_past_a_corrupt_checkpoint(ppo
   assert events[0] == "started" and "crashed" in events and events[-2:] == ["checkpoint", "finished"]
 
 
-def test_evaluation_writes_a_valid_report(ppo_run, tmp_path):
+def test_evaluation_writes_a_valid_report_equal_to_the_in_training_probe(ppo_run, tmp_path):
+  """`train.evaluate --scene hardest` of the exported policy runs the very trials of the
+  in-training hardest probe (train.probe) of the final state: the same figures."""
   out, database = ppo_run
   report = str(tmp_path / "eval.json")
-  assert evaluate.main([out, "--trials", "4", "--scene", "hardest", "--out", report, "--db", database]) == 0
+  assert evaluate.main([out, "--scene", "hardest", "--out", report, "--db", database]) == 0
   with open(report) as f:
     r = json.load(f)
-  assert r["trials"] == 4 and r["scene"] == "hardest"
+  assert r["trials"] == evaluate.EVAL_TRIALS and r["scene"] == "hardest"
   for k in ("progress", "success", "cog_deviation", "pitch_rate", "tipped_over", "length"):
-    assert set(r["metrics"][k]) == {"mean", "std"} and len(r["per_trial"][k]) == 4
+    assert set(r["metrics"][k]) == {"mean", "std"} and len(r["per_trial"][k]) == evaluate.EVAL_TRIALS
   assert 0.0 <= r["metrics"]["progress"]["mean"] <= 1.0 + 1e-6
-  assert len(dbmod.ExperimentDB(database).evals(run_id(out))) == 4
+  assert len(dbmod.ExperimentDB(database).evals(run_id(out))) == evaluate.EVAL_TRIALS
+  probe = [row for row in dbmod.ExperimentDB(database).stats(run_id(out)) if row["source"] == "hardest"]
+  assert [row["step"] for row in probe] == [2048]
+  for column, figure in (("progress_mean", "progress"), ("success_rate", "success"),
+                         ("pitch_rate_mean", "pitch_rate"), ("tipped_rate", "tipped_over")):
+    assert probe[0][column] == pytest.approx(r["metrics"][figure]["mean"], abs=1e-6), column
 
 
 def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path, capsys):
@@ -143,6 +152,14 @@ def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path,
   assert not os.path.exists(str(tmp_path / "x"))
   assert run.main(["--task", "asc-inc-cog", "--set", "reward.cog_scal=1", "--out", str(tmp_path / "y")]) == 2
   assert "reward.cog_scal: unknown key" in capsys.readouterr().err
+  for bad, words in ((["--early-stop", "speed"], "one of return, success"),
+                     (["--probe-every", "-1"], "--probe-every must be >= 0"),
+                     (["--early-stop", "success", "--probe-every", "0"], "needs the hardest-staircase probe")):
+    assert run.main(["--task", "asc-inc-cog", *bad, "--out", str(tmp_path / "z")]) == 2
+    assert words in capsys.readouterr().err
+  assert run.main(["--task", "nav", "--probe-every", "10", "--out", str(tmp_path / "z")]) == 2
+  assert "no hardest staircase" in capsys.readouterr().err
+  assert not os.path.exists(str(tmp_path / "z"))
   before = open(os.path.join(out, "run.json")).read()
   assert run.main(["--task", "asc-inc-cog", "--out", out]) == 2
   assert "already holds run" in capsys.readouterr().err
@@ -274,3 +291,17 @@ def test_a_resume_drops_the_rows_past_its_checkpoint_and_records_the_crash(tmp_p
   assert d.run("r")["total_steps"] == 20
   d.finish("r", "interrupted", {}, 4)
   assert d.events("r")[-1]["event"] == "interrupted"
+
+
+def test_a_database_from_before_row_sources_gains_the_column(tmp_path):
+  """Databases written before stats rows had a source open, and take new rows with one."""
+  import sqlite3
+  path = str(tmp_path / "old.sqlite")
+  old_schema = dbmod.SCHEMA.replace(", metrics_json TEXT, source TEXT", ", metrics_json TEXT")
+  assert old_schema != dbmod.SCHEMA
+  with sqlite3.connect(path) as c:
+    c.executescript(old_schema)
+  d = dbmod.ExperimentDB(path)
+  d.start("r", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path), 10)
+  d.log_stats("r", {"step": 1, "success_rate": 1.0, "source": "hardest"}, {})
+  assert [(s["step"], s["source"]) for s in d.stats("r")] == [(1, "hardest")]

@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(name, type=int)
   p.add_argument("--set", action="append", default=[])
   args = p.parse_args(argv)
-  args.resume, args.early_stop, args.early_stop_return = None, False, None
+  args.resume, args.early_stop, args.probe_every = None, None, 0
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   try:

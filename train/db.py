@@ -35,7 +35,7 @@ CREATE TABLE IF NOT EXISTS experiments (
 CREATE TABLE IF NOT EXISTS stats (
   run_id TEXT NOT NULL REFERENCES experiments(run_id), step INTEGER NOT NULL, wall_s REAL,
   steps_per_s REAL, eps REAL, return_mean REAL, progress_mean REAL, cog_deviation_mean REAL,
-  pitch_rate_mean REAL, tipped_rate REAL, success_rate REAL, metrics_json TEXT
+  pitch_rate_mean REAL, tipped_rate REAL, success_rate REAL, metrics_json TEXT, source TEXT
 );
 CREATE INDEX IF NOT EXISTS stats_run ON stats(run_id, step);
 CREATE TABLE IF NOT EXISTS events (
@@ -49,7 +49,8 @@ CREATE TABLE IF NOT EXISTS evals (
 );
 """
 STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", "progress_mean",
-                "cog_deviation_mean", "pitch_rate_mean", "tipped_rate", "success_rate")
+                "cog_deviation_mean", "pitch_rate_mean", "tipped_rate", "success_rate", "source")
+STAT_SOURCES = ("train", "eval", "hardest")  # training episodes, Brax's evaluator (uniform scenes), the hardest probe
 EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed", "crashed")
 # a run's final status -> the event that records it
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
@@ -82,6 +83,8 @@ class ExperimentDB:
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with self._conn() as c:
       c.executescript(SCHEMA)
+      if "source" not in {r["name"] for r in c.execute("PRAGMA table_info(stats)")}:  # a database from before
+        c.execute("ALTER TABLE stats ADD COLUMN source TEXT")
 
   @contextlib.contextmanager
   def _conn(self) -> Iterator[sqlite3.Connection]:

@@ -40,17 +40,23 @@ def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
   return dataclasses.replace(cfg, scene=s)
 
 
-def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record: bool = False):
-  """Per-trial figures (dict of arrays, mjx_tracks.envs.episode_stats) with each trial's final
-  chassis position, and, if record, qpos of trial 0 at every step and a C model of its scene."""
+EVAL_TRIALS = 100  # trials of an evaluation (and of the in-training hardest probe)
+EVAL_SEED = 1  # their reset keys: jax.random.split(PRNGKey(EVAL_SEED), trials)
+EVAL_EPS = 1.0  # the difficulty handed to reset (pinned scenes such as hardest ignore it)
+
+
+def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float):
+  """A pure rollout(params, keys) -> (sums, qpos of trial 0 per step, trial 0's scene): one episode
+  per trial from `core.reset_at(key, eps)`, actions `make_act(params)(obs)`; sums holds each
+  trial's METRICS sums, its length and its final chassis position."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
-  from mjx_tracks.envs.episode_stats import episode_figures  # noqa: PLC0415
   from mjx_tracks.envs.task_env import METRICS, TrackedRobotEnv  # noqa: PLC0415
   core = TrackedRobotEnv(cfg)
 
-  def rollout(keys):
+  def rollout(params, keys):
+    act = make_act(params)
     s = jax.vmap(core.reset_at, in_axes=(0, None, None))(keys, jnp.float32(eps), jnp.float32(1.0))
     acc0 = {**{k: jnp.zeros(trials) for k in METRICS}, "length": jnp.zeros(trials),
             "final_pos": s.pipeline_state.data.qpos[:, :3]}
@@ -67,14 +73,31 @@ def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record:
     scene0 = jax.tree_util.tree_map(lambda x: x[0], s.pipeline_state.scene)
     return acc, jnp.concatenate([s.pipeline_state.data.qpos[:1], qpos]), scene0
 
-  acc, qpos, scene0 = jax.jit(rollout)(jax.random.split(jax.random.PRNGKey(seed), trials))
+  return core, rollout
+
+
+def trial_keys(trials: int, seed: int = EVAL_SEED):
+  import jax  # noqa: PLC0415
+  return jax.random.split(jax.random.PRNGKey(seed), trials)
+
+
+def per_trial_figures(acc) -> dict:
+  """Per-trial figures (mjx_tracks.envs.episode_stats) and final chassis position from rollout sums."""
+  from mjx_tracks.envs.episode_stats import episode_figures  # noqa: PLC0415
   acc = {k: np.asarray(v) for k, v in acc.items()}
   final = acc["final_pos"]
-  per_trial = {**episode_figures(acc, acc["length"]),
-               "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
+  return {**episode_figures(acc, acc["length"]), "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
+
+
+def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record: bool = False):
+  """Per-trial figures with each trial's final chassis position, and, if record, qpos of trial 0
+  at every step and a C model of its scene."""
+  import jax  # noqa: PLC0415
+  core, rollout = trial_rollout(cfg, lambda _: act, trials, eps)
+  acc, qpos, scene0 = jax.jit(rollout)(None, trial_keys(trials, seed))
   # trial 0's scene in a C model, for rendering its recorded qpos
   render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
-  return per_trial, (np.asarray(qpos) if record else None), render_model
+  return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
 
 
 def _policy(run_dir: str, checkpoint: str | None):
@@ -107,10 +130,10 @@ def _record_trials(args: argparse.Namespace, run_id: str, per_trial: dict) -> No
 def main(argv: list[str] | None = None) -> int:
   p = argparse.ArgumentParser(prog="python -m train.evaluate", description=__doc__.splitlines()[0])
   p.add_argument("run_dir")
-  p.add_argument("--trials", type=int, default=100)
+  p.add_argument("--trials", type=int, default=EVAL_TRIALS)
   p.add_argument("--scene", choices=SCENES, default="hardest")
-  p.add_argument("--eps", type=float, default=1.0, help="difficulty for incremental / train scenes")
-  p.add_argument("--seed", type=int, default=1)
+  p.add_argument("--eps", type=float, default=EVAL_EPS, help="difficulty for incremental / train scenes")
+  p.add_argument("--seed", type=int, default=EVAL_SEED)
   p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>.json)")
   p.add_argument("--db", help="experiment database (default: beside the run directory)")
   p.add_argument("--video", help="MP4 of trial 0 (needs the video extra)")

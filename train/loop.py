@@ -13,6 +13,7 @@ import numpy as np
 from mjx_tracks.envs.wrappers import global_stats_to_json
 from train.algos.episodes import EpisodeAccumulator
 from train.checkpoints import RunCheckpoints
+from train.early_stop import EarlyStop
 from train.mesh import local_value, to_host
 
 
@@ -68,23 +69,25 @@ class Loop:
   """Runs updates from a step until a total; see `run`."""
 
   def __init__(self, update, steps_per_update: int, checkpointer: Checkpointer, reporter,
-               report_every: int, stop, early_stop_return: float | None = None,
-               evaluate: Callable | None = None, eval_every: int | None = None):
+               report_every: int, stop, early_stop: EarlyStop | None = None,
+               evaluate: Callable | None = None, eval_every: int | None = None,
+               probe: Callable | None = None, probe_every: int = 0):
     self.update, self.spu = update, steps_per_update
     self.checkpointer, self.reporter, self.stop = checkpointer, reporter, stop
     self.report_every = max(report_every, steps_per_update)
-    self.early = early_stop_return
-    self.evaluate, self.eval_every = evaluate, eval_every
+    self.early = early_stop
+    # (evaluation, its cadence in steps): Brax's evaluator on uniform scenes, the hardest probe
+    self.evals = [(f, every) for f, every in ((evaluate, eval_every), (probe, probe_every)) if f and every]
 
   def run(self, state, step: int, total: int) -> LoopResult:
     """Updates until `total` steps, an early stop or a stop request; the state at the end is
     checkpointed by the caller."""
     acc, pending = EpisodeAccumulator(), []
-    next_report, next_eval = step + self.report_every, self._next_eval(step)
+    next_report, next_evals = step + self.report_every, [self._next(step, e) for _, e in self.evals]
     self.checkpointer.last_t = self.mark_t = time.monotonic()
     self.mark_step, self.paused_s = step, 0.0
     reason = "done"
-    while step < total:
+    while step < total and reason == "done":
       stop, ckpt = _agree(self.stop.requested is not None, self.checkpointer.due())
       if stop:
         reason = "interrupted"
@@ -94,23 +97,23 @@ class Loop:
       state, metrics = self.update(state)
       step += self.spu
       pending.append(metrics)
+      rows = []
       if step >= next_report or step >= total:
-        row = self._report(step, acc, pending)
+        rows.append(self._report(step, acc, pending))
         pending, next_report = [], next_report + self.report_every
-        if self.early is not None and row.get("return_mean", -np.inf) >= self.early:
-          reason = "early_stop"
-          break
-      if next_eval is not None and step >= next_eval:
-        self.reporter(step, self._paused(self.evaluate, state))
-        next_eval = self._next_eval(step)
+      for i, (evaluate, every) in enumerate(self.evals):
+        if step >= next_evals[i]:
+          rows.append(self.reporter(step, self._paused(evaluate, state)))
+          next_evals[i] = self._next(step, every)
+      if self.early is not None and any(self.early.met(r) for r in rows):
+        reason = "early_stop"
     if pending:
       self._report(step, acc, pending)
     return LoopResult(state, step, reason)
 
-  def _next_eval(self, step: int) -> int | None:
-    if self.evaluate is None or not self.eval_every:
-      return None
-    return (step // self.eval_every + 1) * self.eval_every
+  @staticmethod
+  def _next(step: int, every: int) -> int:
+    return (step // every + 1) * every
 
   def _paused(self, fn, *args):
     """fn(*args), its time left out of the training throughput."""

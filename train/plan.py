@@ -12,9 +12,9 @@ import secrets
 from typing import Any
 
 from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
+from train.early_stop import EarlyStop, parse_early_stop
 from train.presets import get_preset
 
-EARLY_STOP_RETURN = {"up": 0.5, "down": 0.6}  # the paper's thresholds (mean return of recent episodes)
 
 
 class RunError(Exception):
@@ -35,7 +35,8 @@ class RunPlan:
   total_steps: int
   num_envs: int
   resume: bool
-  early_stop_return: float | None
+  early_stop: EarlyStop | None
+  probe_every: int  # steps between hardest-staircase probes (0: none)
   start_step: int = 0  # the checkpoint a resumed run continues from
 
 
@@ -45,7 +46,7 @@ def _default_preset() -> str:
 
 
 # options a resumed run takes from its run.json; giving one with --resume is refused
-RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "early_stop_return")
+RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "probe_every")
 
 
 def _plan_resume(args: argparse.Namespace) -> RunPlan:
@@ -73,9 +74,18 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
                    f"it further: --resume {args.resume} --steps N with N > {done:,}")
   preset = dataclasses.replace(get_preset(meta["algo"], meta["preset"]), num_envs=meta["num_envs"])
   _check_devices(meta["num_envs"])
+  cfg = from_dict(meta["config"])
   return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
-                 preset, meta["seed"], tuple(meta["overrides"]), from_dict(meta["config"]), total,
-                 meta["num_envs"], True, meta.get("early_stop_return"), done)
+                 preset, meta["seed"], tuple(meta["overrides"]), cfg, total, meta["num_envs"], True,
+                 _early_stop_of(meta, cfg), meta.get("probe_every", 0), done)
+
+
+def _early_stop_of(meta: dict, cfg) -> EarlyStop | None:
+  """A run.json's early stop (runs from before `early_stop` recorded `early_stop_return`)."""
+  if meta.get("early_stop"):
+    return parse_early_stop(meta["early_stop"], cfg)
+  old = meta.get("early_stop_return")
+  return None if old is None else EarlyStop("return", old)
 
 
 def _check_devices(num_envs: int) -> None:
@@ -137,14 +147,28 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     other = os.path.join(out_dir, "run.json")
     what = f"run {json.load(open(other))['run_id']}" if os.path.exists(other) else "other files"
     raise RunError(f"{out_dir} already holds {what}; use --resume {out_dir} or another --out")
-  early = None
-  if args.early_stop or args.early_stop_return is not None:
-    early = args.early_stop_return if args.early_stop_return is not None else \
-        EARLY_STOP_RETURN.get(cfg.scene.direction if cfg.scene.kind == "stairs" else "", None)
-    if early is None:
-      raise RunError("--early-stop needs --early-stop-return for this task")
+  try:
+    early = parse_early_stop(args.early_stop, cfg) if args.early_stop else None
+  except ValueError as e:
+    raise RunError(str(e))
+  probe_every = _probe_every(args.probe_every, early, preset, cfg)
   return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
-                 cfg, steps, num_envs, False, early)
+                 cfg, steps, num_envs, False, early, probe_every)
+
+
+def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int:
+  """Steps between hardest-staircase probes: as given, else the preset's (stair tasks); an early
+  stop on success needs them."""
+  if given is not None and given < 0:
+    raise RunError("--probe-every must be >= 0 (0: no probe)")
+  if given == 0 and early is not None and early.needs_probe:
+    raise RunError(f"--early-stop {early} needs the hardest-staircase probe; drop --probe-every 0")
+  every = given if given is not None else (preset.probe_steps if cfg.scene.kind == "stairs" else 0)
+  if early is not None and early.needs_probe and every == 0:
+    every = preset.probe_steps or preset.training_metrics_steps
+  if every and cfg.scene.kind != "stairs":
+    raise RunError(f"--probe-every: task {cfg.task} has no hardest staircase to probe")
+  return every
 
 
 def write_run_json(plan: RunPlan) -> None:
@@ -156,7 +180,7 @@ def write_run_json(plan: RunPlan) -> None:
   meta = {"run_id": plan.run_id, "task": plan.task, "algo": plan.algo, "preset": plan.preset_name,
           "seed": plan.seed, "overrides": list(plan.overrides), "config": plan.cfg.to_dict(),
           "total_steps": plan.total_steps, "num_envs": plan.num_envs,
-          "early_stop_return": plan.early_stop_return,
+          "early_stop": str(plan.early_stop) if plan.early_stop else None, "probe_every": plan.probe_every,
           "created": created}
   tmp = path + ".tmp"
   with open(tmp, "w") as f:

@@ -26,6 +26,7 @@ class PPOPreset:
   num_evals: int = 10
   num_eval_envs: int = 256
   training_metrics_steps: int = 500_000
+  probe_steps: int = 81_920  # steps between hardest-staircase probes (train.probe); 0: none unless asked
   run_evals: bool = True  # brax's evaluation on a separate env (uniform scenes) at each eval point
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=1024",)
 
@@ -45,6 +46,7 @@ class SACPreset:
   max_replay_size: int = 1_000_000
   hidden: tuple[int, ...] = (256, 256)
   training_metrics_steps: int = 100_000
+  probe_steps: int = 100_000  # steps between hardest-staircase probes (train.probe); 0: none unless asked
   num_evals: int = 10
   num_eval_envs: int = 256
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=256",)
@@ -55,13 +57,13 @@ PRESETS: dict[str, dict[str, object]] = {
         "cpu": PPOPreset(num_envs=16, num_timesteps=2_560, unroll_length=8, batch_size=16,
                          num_minibatches=4, num_updates_per_batch=2, policy_hidden=(32, 32),
                          value_hidden=(32, 32), num_evals=2, num_eval_envs=8,
-                         training_metrics_steps=512, run_evals=False, config_overrides=()),
+                         training_metrics_steps=512, probe_steps=0, run_evals=False, config_overrides=()),
         "gpu": PPOPreset(),
     },
     "sac": {
         "cpu": SACPreset(num_envs=8, num_timesteps=1_024, batch_size=32, grad_updates_per_step=1, actor_steps_per_update=4,
                          min_replay_size=64, max_replay_size=10_000, hidden=(32, 32), num_evals=2,
-                         training_metrics_steps=128,
+                         training_metrics_steps=128, probe_steps=0,
                          num_eval_envs=8, config_overrides=()),
         "gpu": SACPreset(),
         # paper: SB3 SAC, 2 x 64 MLP, ent_coef init 0.5 (reward scale 2 with brax's alpha = 1),
@@ -70,7 +72,7 @@ PRESETS: dict[str, dict[str, object]] = {
                            discounting=0.99, tau=0.05, reward_scaling=2.0, grad_updates_per_step=1,
                            actor_steps_per_update=50,
                            min_replay_size=100, max_replay_size=1_000_000, hidden=(64, 64),
-                           training_metrics_steps=1_000,
+                           training_metrics_steps=1_000, probe_steps=5_000,
                            num_evals=20, num_eval_envs=10, config_overrides=()),
     },
 }

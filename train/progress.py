@@ -10,6 +10,7 @@ import numpy as np
 
 from mjx_tracks.envs.episode_stats import episode_figures
 from mjx_tracks.envs.task_env import METRICS
+from train.probe import PREFIX as PROBE
 
 
 def summarize(metrics: dict[str, Any]) -> dict[str, float]:
@@ -17,6 +18,8 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
   evaluation ('eval/episode_...') metrics: batch means of the episode sums, so the COG deviation
   and pitch rate are ratios of means."""
   m = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
+  if any(k.startswith(PROBE) for k in m):  # already per-trial means (train.probe)
+    return {k[len(PROBE):]: v for k, v in m.items() if k.startswith(PROBE)}
   if "episode/sum_reward" in m:
     prefix, ret, length = "episode/", m["episode/sum_reward"], m.get("episode/length")
   elif "eval/episode_reward" in m:
@@ -32,6 +35,16 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
   return {k: float(v) for k, v in out.items() if v is not None}
 
 
+LABELS = {"train": "train", "eval": "eval ", "hardest": "hard "}  # a row's source -> its line's tag
+
+
+def _source(metrics: dict) -> str:
+  """Which kind of report the metrics are (train.db.STAT_SOURCES)."""
+  if any(k.startswith(PROBE) for k in metrics):
+    return "hardest"
+  return "eval" if any(k.startswith("eval/") for k in metrics) else "train"
+
+
 class Reporter:
   """Called with (global step, metrics: episode means 'episode/...', Brax evaluation 'eval/...',
   'training/...' losses, 'curriculum/eps'); prints, logs to TensorBoard and the database."""
@@ -44,6 +57,7 @@ class Reporter:
     self.session_t0 = time.time()
     self.t0 = self.session_t0 - wall_offset  # s: a resumed run's wall time continues from its checkpoint
     self.latest: dict[str, float] = {}
+    self.latest_hardest: dict[str, float] = {}
     self.writer = None
     if tb_dir:
       from tensorboardX import SummaryWriter  # noqa: PLC0415
@@ -54,26 +68,30 @@ class Reporter:
     sps = metrics.get("training/steps_per_s")  # the loop's: evaluation and checkpoint time excluded
     fig = summarize(metrics)
     eps = metrics.get("curriculum/eps")
-    row = {"step": step, "wall_s": now - self.t0, "steps_per_s": sps, "eps": eps, **fig}
-    if fig:
-      self.latest = {k: v for k, v in row.items() if v is not None}
-    kind = "eval" if any(k.startswith("eval/") for k in metrics) else "train"
-    self._print(row, kind)
+    row = {"step": step, "wall_s": now - self.t0, "steps_per_s": sps, "eps": eps, **fig,
+           "source": _source(metrics)}
+    figures = {k: v for k, v in row.items() if v is not None and k != "source"}
+    if fig and row["source"] == "hardest":  # the summary's figures: the last probe, and
+      self.latest_hardest = {f"hardest_{k}": v for k, v in fig.items()}
+    elif fig:  # the last report or evaluation
+      self.latest = figures
+    self._print(row)
     scalars = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
     if self.writer:
-      for k, v in {**scalars, **{f"summary/{k}": v for k, v in row.items() if v is not None}}.items():
+      summary = {f"summary/{k}": v for k, v in row.items() if v is not None and k != "source"}
+      for k, v in {**scalars, **summary}.items():
         self.writer.add_scalar(k, v, step)
       self.writer.flush()
     if self.db is not None and fig:
       self.db.log_stats(self.run_id, row, scalars)
     return row
 
-  def _print(self, row: dict, kind: str) -> None:
+  def _print(self, row: dict) -> None:
     f = lambda k, fmt: (fmt.format(row[k]) if row.get(k) is not None else "-")
     elapsed = time.time() - self.session_t0  # this process's share, for the ETA
     done = (row["step"] - self.start_step) / max(self.total - self.start_step, 1)
     eta = elapsed / done - elapsed if done > 0 else float("nan")
-    print(f"[{kind:5s}] {row['step']:>11,}/{self.total:,} ({100 * row['step'] / max(self.total, 1):5.1f}%) "
+    print(f"[{LABELS[row['source']]}] {row['step']:>11,}/{self.total:,} ({100 * row['step'] / max(self.total, 1):5.1f}%) "
           f"{f('steps_per_s', '{:,.0f}')} steps/s | return {f('return_mean', '{:.3f}')} | "
           f"progress {f('progress_mean', '{:.3f}')} | eps {f('eps', '{:.2f}')} | "
           f"cog {f('cog_deviation_mean', '{:.3f}')} m | pitch rate {f('pitch_rate_mean', '{:.2f}')} rad/s | "

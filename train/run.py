@@ -23,6 +23,7 @@ import sys
 from mjx_tracks.envs.config import ConfigError
 from train.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
+from train.early_stop import EARLY_STOP_SUCCESS
 from train.plan import RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
@@ -43,10 +44,13 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                  help="dotted config override, e.g. --set reward.cog_scale=0.5")
   p.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its last readable checkpoint")
-  p.add_argument("--early-stop", action="store_true",
-                 help="stop when the mean return of recent episodes reaches the task's threshold "
-                      "(paper: 0.5 ascent, 0.6 descent)")
-  p.add_argument("--early-stop-return", type=float, help="explicit early-stop threshold")
+  p.add_argument("--early-stop", nargs="?", const="return", metavar="CRITERION",
+                 help="stop at a criterion: 'return' (alone: the mean return of recent training episodes "
+                      "reaches the paper's 0.5 ascent / 0.6 descent), 'success' (the hardest-staircase "
+                      f"probe's success reaches {EARLY_STOP_SUCCESS}), or either with =THRESHOLD")
+  p.add_argument("--probe-every", type=int, metavar="STEPS",
+                 help="steps between evaluations on the hardest staircase (the trials of train.evaluate "
+                      "--scene hardest); 0: none (default: the preset's, stair tasks only)")
   p.add_argument("--checkpoint-every", type=float, default=CHECKPOINT_EVERY_S, metavar="SECONDS",
                  help=f"wall time between checkpoints (default {CHECKPOINT_EVERY_S:g} s)")
   p.add_argument("--keep-checkpoints", type=int, default=KEEP, metavar="K",
@@ -76,8 +80,9 @@ def _train(plan: RunPlan, args) -> int:
   records, trains, and closes them; returns the exit code."""
   from train.interrupts import StopRequest  # noqa: PLC0415
   from train.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
+  early = f", early stop at {plan.early_stop}" if plan.early_stop else ""
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
-        f"{device_summary()}, {plan.total_steps:,} steps -> {plan.out_dir}", flush=True)
+        f"{device_summary()}, {plan.total_steps:,} steps{early} -> {plan.out_dir}", flush=True)
   options = SessionOptions(args.checkpoint_every, args.keep_checkpoints)
   with StopRequest() as stop:
     try:
@@ -92,7 +97,7 @@ def _train(plan: RunPlan, args) -> int:
       final = train(prepared, db, stop, options)
       status = STATUS[final["reason"]]
     finally:
-      db.finish(plan.run_id, status, final, final.get("step"), _detail(status, stop))
+      db.finish(plan.run_id, status, final, final.get("step"), _detail(status, stop, plan))
   if status == "interrupted":
     print(f"interrupted at step {final['step']:,}: checkpoint and policy saved; continue with: "
           f"python -m train.run --resume {plan.out_dir}", file=sys.stderr, flush=True)
@@ -101,9 +106,9 @@ def _train(plan: RunPlan, args) -> int:
   return 0
 
 
-def _detail(status: str, stop) -> str:
+def _detail(status: str, stop, plan: RunPlan) -> str:
   if status == "stopped_early":
-    return "early stop"
+    return f"early stop: {plan.early_stop}"
   if status == "interrupted" and stop.requested is not None:
     import signal  # noqa: PLC0415
     return signal.Signals(stop.requested).name

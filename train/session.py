@@ -15,6 +15,7 @@ from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunChec
 from train.loop import Checkpointer, Loop, LoopResult
 from train.mesh import from_host, to_host
 from train.plan import RunError, RunPlan
+from train.probe import HardestProbe
 from train.progress import Reporter
 
 
@@ -70,8 +71,9 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) ->
                       stream=sys.stdout if primary else open(os.devnull, "w"),
                       wall_offset=db.wall_offset(plan.run_id, start_step))
   eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
+  probe = HardestProbe(t) if plan.probe_every else None
   loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, p.training_metrics_steps, stop,
-              plan.early_stop_return, _evaluator(t), eval_every)
+              plan.early_stop, _evaluator(t), eval_every, probe, plan.probe_every)
   return loop, reporter
 
 
@@ -101,7 +103,8 @@ def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions
     policy_dir = _finish(t, result, checkpointer)
   finally:
     reporter.close()
-  return {"step": result.step, "reason": result.reason, "policy": policy_dir, **reporter.latest}
+  return {"step": result.step, "reason": result.reason, "policy": policy_dir, **reporter.latest,
+          **reporter.latest_hardest}
 
 
 def device_summary() -> str:

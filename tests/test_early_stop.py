@@ -1,0 +1,65 @@
+"""Early-stop criteria and the loop's evaluation cadence, with a fake learner (no compilation)."""
+
+import types
+
+import pytest
+
+from mjx_tracks.envs.config import load_config
+from train.early_stop import EARLY_STOP_RETURN, EARLY_STOP_SUCCESS, EarlyStop, parse_early_stop
+from train.loop import Checkpointer, Loop
+
+
+def test_criteria_parse_with_their_defaults_and_name_bad_input():
+  up, nav = load_config("asc-inc-cog", ()), load_config("nav", ())
+  assert parse_early_stop("return", up) == EarlyStop("return", EARLY_STOP_RETURN["up"])
+  assert parse_early_stop("success", up) == EarlyStop("success", EARLY_STOP_SUCCESS)
+  assert parse_early_stop("success=0.5", up).threshold == 0.5 and str(parse_early_stop("return=0.25", up)) == "return=0.25"
+  for text, words in (("speed", "one of return, success"), ("success=abc", "not a number"),
+                      ("success=1.5", r"in \[0, 1\]")):
+    with pytest.raises(ValueError, match=words):
+      parse_early_stop(text, up)
+  with pytest.raises(ValueError, match="no hardest staircase"):
+    parse_early_stop("success", nav)
+  with pytest.raises(ValueError, match="no paper threshold"):
+    parse_early_stop("return", nav)
+
+
+class FakeReporter:
+  """Rows as train.progress.Reporter makes them: source from the metrics' prefix."""
+
+  def __init__(self):
+    self.rows = []
+
+  def __call__(self, step, metrics):
+    source = "hardest" if "hardest/success_rate" in metrics else "train"
+    row = {"step": step, "source": source, "success_rate": metrics.get("hardest/success_rate"),
+           "return_mean": metrics.get("episode/sum_reward")}
+    self.rows.append(row)
+    return row
+
+
+def _loop(probe_success, early, probe_every=300):
+  """A loop of 100-step updates whose training return is 0.1 and whose probe's success follows a list."""
+  successes = iter(probe_success)
+  update = lambda s: (s + 1, {"episode/sum_reward": 0.1, "episode/count": 1.0})
+  ckpt = Checkpointer(None, {}, None, lambda step: None, every_s=1e9)
+  reporter = FakeReporter()
+  loop = Loop(update, 100, ckpt, reporter, 100, types.SimpleNamespace(requested=None), early,
+              probe=lambda s: {"hardest/success_rate": next(successes)}, probe_every=probe_every)
+  return loop, reporter
+
+
+def test_the_loop_stops_at_the_first_probe_reaching_the_success_threshold():
+  loop, reporter = _loop([0.5, 0.96, 0.98, 1.0], EarlyStop("success", 0.97))
+  result = loop.run(0, 0, 10_000)
+  assert result.reason == "early_stop" and result.step == 900 and result.state == 9
+  assert [r["step"] for r in reporter.rows if r["source"] == "hardest"] == [300, 600, 900]
+
+
+def test_a_return_criterion_ignores_the_probe_and_a_run_without_one_goes_to_the_end():
+  loop, _ = _loop([1.0] * 10, EarlyStop("return", 0.5))
+  assert loop.run(0, 0, 1_000).reason == "done"
+  loop, _ = _loop([1.0] * 10, EarlyStop("return", 0.1))
+  assert (lambda r: (r.reason, r.step))(loop.run(0, 0, 1_000)) == ("early_stop", 100)
+  loop, _ = _loop([1.0] * 10, None)
+  assert loop.run(0, 0, 1_000).step == 1_000
