@@ -68,8 +68,8 @@ def test_belt_bottom_moves_backward_and_front_end_down(flat):
   d = adv(d, jnp.zeros(6))
   d = jax.jit(lambda d: jax.tree_util.tree_map(lambda x: x, d))(d)
   from mujoco import mjx
-  d = mjx.forward(m, d)
-  on_belt, _, u_dir, _ = contact_belt_velocity(m, d, sim.tracks, jnp.ones(6))
+  d = jax.jit(mjx.forward)(m, d)  # jitted: op by op, MJX takes a minute on a CPU
+  on_belt, _, u_dir, _ = jax.jit(lambda m, d: contact_belt_velocity(m, d, sim.tracks, jnp.ones(6)))(m, d)
   c = mjx_private.contacts(d)
   touching = np.asarray(on_belt & (c.dist < 0))
   assert touching.sum() >= 4  # both side tracks rest on the floor at both ends

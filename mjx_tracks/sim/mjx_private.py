@@ -60,8 +60,8 @@ def with_contacts(d: mjx.Data, contact) -> mjx.Data:
 
 
 def efc_rows(d: mjx.Data) -> int:
-  """Number of constraint rows."""
-  return d._impl.efc_aref.shape[0]
+  """Number of constraint rows (per robot, for a batch too)."""
+  return d._impl.efc_aref.shape[-1]
 
 
 def contact_row0(m: mujoco.MjModel) -> int:

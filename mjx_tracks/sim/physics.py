@@ -20,6 +20,8 @@ class PhysicsConfig:
   solver_iterations: int  # Newton iterations
   ls_iterations: int  # line-search iterations
   impratio: float  # friction-to-normal impedance ratio
+  contact_slots: int  # contacts kept per robot and substep, least distance first (MJX max_contact_points); -1: all
+  box_pairs: int  # belt-box pairs tested per substep, nearest bounding spheres first (MJX max_geom_pairs); -1: all
 
   def validate(self, key: str = "physics") -> None:
     if not 0.0005 <= self.timestep <= 0.02:
@@ -27,6 +29,9 @@ class PhysicsConfig:
     for name in ("solver_iterations", "ls_iterations"):
       if getattr(self, name) < 1:
         raise ValueError(f"{key}.{name}: must be >= 1")
+    for name in ("contact_slots", "box_pairs"):
+      if getattr(self, name) == 0 or getattr(self, name) < -1:
+        raise ValueError(f"{key}.{name}: must be -1 (all) or >= 1, got {getattr(self, name)}")
     if self.impratio <= 0:
       raise ValueError(f"{key}.impratio: must be > 0")
 
@@ -40,6 +45,7 @@ def build_mjcf(robot: RobotSpec, world: str, physics: PhysicsConfig) -> str:
           cone="pyramidal" impratio="{physics.impratio}">
     <flag eulerdamp="disable"/>
   </option>
+  {_contact_limits_xml(physics)}
   <visual><global offwidth="640" offheight="480"/></visual>
   <asset><material name="world" rgba=".7 .7 .7 1"/></asset>
   <worldbody>
@@ -49,6 +55,13 @@ def build_mjcf(robot: RobotSpec, world: str, physics: PhysicsConfig) -> str:
   </worldbody>
   {actuators_xml(robot)}
 </mujoco>"""
+
+
+def _contact_limits_xml(physics: PhysicsConfig) -> str:
+  """MJX's contact culling (custom numerics; MuJoCo's C engine ignores them and keeps every pair)."""
+  limits = {"max_contact_points": physics.contact_slots, "max_geom_pairs": physics.box_pairs}
+  numerics = "".join(f'<numeric name="{k}" data="{v}"/>' for k, v in limits.items() if v > 0)
+  return f"<custom>{numerics}</custom>" if numerics else ""
 
 
 def compile_model(robot: RobotSpec, world: str, physics: PhysicsConfig) -> mujoco.MjModel:

@@ -1,0 +1,77 @@
+"""Where the environment step's time goes: full env throughput (physics + track model + beams +
+monitor + curriculum resets) of the task under config variants, side by side in one process, with
+each variant's speed-up over the first (the default config).
+
+python scripts/ablate_env.py [--task asc-inc-cog] [--envs 16384] [--reps 5] [--out FILE]
+                             [--variant NAME:KEY=VALUE;KEY=VALUE ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import jax
+import jax.numpy as jnp
+
+import mjx_tracks
+from mjx_tracks.envs.wrappers import batched_env
+from mjx_tracks.sim import mjx_private
+from bench_env import timed
+from result_file import write_result
+
+VARIANTS = {  # name -> config overrides; the first is the reference
+    "default": (),
+    "contact slots 64": ("physics.contact_slots=64",),
+    "contact slots 48": ("physics.contact_slots=48",),
+    "box pairs 22": ("physics.box_pairs=22",),
+    "slots 48 + pairs 22": ("physics.contact_slots=48", "physics.box_pairs=22"),
+    "no beams": ("observation.parts=[v, flippers_paired, arm, pitch]",),
+    "2 solver iterations": ("physics.solver_iterations=2",),
+    "3 line-search iterations": ("physics.ls_iterations=3",),
+    "timestep 0.0125 s (20 substeps)": ("physics.timestep=0.0125",),
+}
+
+
+def parse_variant(text: str) -> tuple[str, tuple[str, ...]]:
+  """'NAME:KEY=VALUE;KEY=VALUE' -> (NAME, overrides)."""
+  name, _, overrides = text.partition(":")
+  return name, tuple(o for o in overrides.split(";") if o)
+
+
+def measure(task: str, overrides: tuple[str, ...], n: int, reps: int) -> dict:
+  """Control steps/s of n robots under the overrides, and the compile time."""
+  core = mjx_tracks.load(task, overrides)
+  env = batched_env(core)
+  state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), n))
+  actions = lambda i: (jax.random.uniform(jax.random.PRNGKey(i), (n, core.action_size), minval=-1, maxval=1),)
+  compile_s, step_s = timed(jax.jit(env.step), state, actions, reps)
+  rows = mjx_private.efc_rows(state.pipeline_state.data)
+  return {"control_steps_per_s": round(n / step_s), "compile_s": round(compile_s, 1),
+          "substeps": core.substeps, "constraint_rows": rows}
+
+
+def main(argv=None) -> int:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("--task", default="asc-inc-cog")
+  p.add_argument("--envs", type=int, default=16384)
+  p.add_argument("--reps", type=int, default=5)
+  p.add_argument("--variant", action="append", default=[], help="NAME:KEY=VALUE;KEY=VALUE (replaces the built-in list)")
+  p.add_argument("--out")
+  args = p.parse_args(argv)
+  variants = dict(parse_variant(v) for v in args.variant) if args.variant else VARIANTS
+  rows, base = [], None
+  for name, overrides in variants.items():
+    row = {"variant": name, "overrides": list(overrides), "envs": args.envs,
+           **measure(args.task, overrides, args.envs, args.reps)}
+    base = base or row["control_steps_per_s"]
+    row["speedup"] = round(row["control_steps_per_s"] / base, 3)
+    rows.append(row)
+    print(json.dumps(row), flush=True)
+  write_result(args.out, rows, task=args.task)
+  return 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())
