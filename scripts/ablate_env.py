@@ -22,11 +22,11 @@ from bench_env import timed
 from result_file import write_result
 
 VARIANTS = {  # name -> config overrides; the first is the reference
-    "default": (),
-    "contact slots 64": ("physics.contact_slots=64",),
-    "contact slots 48": ("physics.contact_slots=48",),
-    "box pairs 22": ("physics.box_pairs=22",),
-    "slots 48 + pairs 22": ("physics.contact_slots=48", "physics.box_pairs=22"),
+    "every contact kept (before culling)": ("physics.contact_slots=-1", "physics.box_pairs=-1"),
+    "48 contact slots": ("physics.box_pairs=-1",),
+    "22 box pairs": ("physics.contact_slots=-1",),
+    "default (48 slots, 22 pairs)": (),
+    "32 contact slots": ("physics.contact_slots=32",),
     "no beams": ("observation.parts=[v, flippers_paired, arm, pitch]",),
     "2 solver iterations": ("physics.solver_iterations=2",),
     "3 line-search iterations": ("physics.ls_iterations=3",),

@@ -54,5 +54,25 @@ def test_bad_physics_config_fails_clearly(default_physics):
   from mjx_tracks.sim.physics import compile_model
   with pytest.raises(ValueError, match="timestep"):
     compile_model(get_robot(1), "", dataclasses.replace(default_physics, timestep=0.5))
-  with pytest.raises(KeyError, match="unknown robot"):
-    get_robot(3)
+  for name in ("contact_slots", "box_pairs"):
+    for bad in (0, -2):
+      with pytest.raises(ValueError, match=f"physics.{name}: must be -1"):
+        compile_model(get_robot(1), "", dataclasses.replace(default_physics, **{name: bad}))
+
+
+def test_contact_limits_reach_mjx_and_not_the_c_engine(default_physics):
+  """contact_slots / box_pairs become MJX's max_contact_points / max_geom_pairs numerics (MJX then
+  keeps that many contact slots); -1 writes none, and MJX keeps a slot for every possible contact."""
+  import jax.numpy as jnp
+  from mjx_tracks.sim import mjx_private
+  from mjx_tracks.sim.simulator import staircase_simulator
+
+  def slots(**limits):
+    sim = staircase_simulator(get_robot(1), dataclasses.replace(default_physics, **limits))
+    m = sim.mj_model
+    numerics = {m.numeric(i).name: float(m.numeric(i).data[0]) for i in range(m.nnumeric)}
+    d = sim.init_data(jnp.zeros(3), jnp.float32(0.0))
+    return numerics, mjx_private.contacts(d).dist.shape[0]
+
+  assert slots(contact_slots=7, box_pairs=5) == ({"max_contact_points": 7.0, "max_geom_pairs": 5.0}, 7)
+  assert slots(contact_slots=-1, box_pairs=-1) == ({}, 220)  # 3 planes x 11 belts x 2 + 7 boxes x 11 x 2

@@ -3,6 +3,7 @@ batched (vmap) and single stepping agree."""
 
 import jax
 import jax.numpy as jnp
+import mujoco
 import numpy as np
 import pytest
 
@@ -28,6 +29,38 @@ def test_scripted_controller_negotiates_seven_steps(robot_fixture, direction, re
   assert s["goal_reached"], s
   expected_height = 7 * 0.17 if direction == "up" else 0.0
   assert s["final_height_m"] == pytest.approx(expected_height, abs=0.05)
+  _assert_culling_keeps_every_touch(setup, qpos)
+
+
+def _assert_culling_keeps_every_touch(setup: DriveSetup, qpos: np.ndarray) -> None:
+  """At every state of the drive, MuJoCo's C engine (which keeps every pair) finds no more touching
+  contacts than physics.contact_slots keeps, and each belt-box pair it finds touching is among the
+  physics.box_pairs pairs MJX tests (nearest bounding spheres first, as MJX ranks them)."""
+  sim = setup.sim
+  box_pos, box_size = (np.asarray(x) for x in sc.step_boxes(setup.stairs))
+  mj = sim.c_model_with_boxes(box_pos, box_size)
+  boxes = np.asarray(sim.layout.scene_boxes)
+  belts = np.flatnonzero((mj.geom_type == mujoco.mjtGeom.mjGEOM_CAPSULE) & (mj.geom_contype != 0))
+  rbound = mj.geom_rbound.copy()
+  rbound[boxes] = np.linalg.norm(box_size, axis=-1)
+  d = mujoco.MjData(mj)
+  contacts, worst_rank = [], []
+  for q in qpos:
+    d.qpos[:] = q
+    mujoco.mj_forward(mj, d)
+    touching = [(c.geom1, c.geom2) for c in d.contact[:d.ncon] if c.dist < 0]
+    contacts.append(len(touching))
+    gap = (np.linalg.norm(d.geom_xpos[belts][:, None] - d.geom_xpos[boxes][None], axis=-1)
+           - rbound[belts][:, None] - rbound[boxes][None])  # MJX's broadphase distance
+    rank = np.argsort(np.argsort(gap.ravel(), kind="stable")).reshape(gap.shape)
+    ranks = [rank[np.flatnonzero(belts == g)[0], np.flatnonzero(boxes == b)[0]]
+             for g1, g2 in touching for g, b in ((g1, g2), (g2, g1)) if g in belts and b in boxes]
+    worst_rank.append(max(ranks, default=-1))
+  if sim.physics.contact_slots > 0:
+    assert max(contacts) <= sim.physics.contact_slots, (max(contacts), sim.physics.contact_slots)
+  if sim.physics.box_pairs > 0:
+    assert max(worst_rank) < sim.physics.box_pairs, (max(worst_rank), sim.physics.box_pairs)
+  assert max(contacts) >= 4  # the drive rests on its tracks: the check sees contacts
 
 
 def test_random_actions_on_stairs_stay_finite_and_within_limits(jaguar_stairs):
