@@ -64,6 +64,17 @@ def test_a_run_config_missing_a_key_names_it():
     from_dict(raw)
 
 
+def test_a_run_config_from_before_contact_culling_keeps_every_contact():
+  """run.json files written before physics.contact_slots / box_pairs existed load with -1 (all
+  contacts, what those runs simulated), not with today's defaults."""
+  raw = load_config("asc-inc-cog").to_dict()
+  assert raw["physics"]["contact_slots"] > 0 and raw["physics"]["box_pairs"] > 0
+  for key in ("contact_slots", "box_pairs"):
+    del raw["physics"][key]
+  physics = from_dict(raw).physics
+  assert (physics.contact_slots, physics.box_pairs) == (-1, -1)
+
+
 def test_renamed_curriculum_variants_say_their_new_names():
   with pytest.raises(ConfigError, match="'original' is now 'original_code'"):
     load_config("asc-inc-cog", ["scene.variant=original"])

@@ -46,9 +46,9 @@ EVAL_EPS = 1.0  # the difficulty handed to reset (pinned scenes such as hardest 
 
 
 def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float):
-  """A pure rollout(params, keys) -> (sums, qpos of trial 0 per step, trial 0's scene): one episode
-  per trial from `core.reset_at(key, eps)`, actions `make_act(params)(obs)`; sums holds each
-  trial's METRICS sums, its length and its final chassis position."""
+  """(core, rollout): the task env and a pure rollout(params, keys) -> (sums, qpos of trial 0 per
+  step, trial 0's scene), one episode per trial from `core.reset_at(key, eps)` with actions
+  `make_act(params)(obs)`; sums holds each trial's METRICS sums, length and final chassis position."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 

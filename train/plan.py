@@ -16,7 +16,6 @@ from train.early_stop import EarlyStop, parse_early_stop
 from train.presets import get_preset
 
 
-
 class RunError(Exception):
   """A bad request: reported as one line, nothing written."""
 

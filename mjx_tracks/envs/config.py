@@ -267,9 +267,22 @@ def available_tasks() -> list[str]:
                 if p.name.endswith(".yaml") and p.name[:-5] != DEFAULTS)
 
 
+# keys added since runs were first recorded -> the value that reproduces what those runs ran
+ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1}  # before culling: every contact
+
+
+def _with_added_keys(raw: dict) -> dict:
+  """A recorded config (run.json) from before a key existed, with that key's old behaviour."""
+  raw = dict(raw)
+  for (section, key), value in ADDED_KEYS.items():
+    if isinstance(raw.get(section), dict) and key not in raw[section]:
+      raw[section] = {**raw[section], key: value}
+  return raw
+
+
 def from_dict(raw: dict) -> TaskConfig:
   """Builds and validates a TaskConfig from a complete plain mapping (e.g. a run's run.json)."""
-  cfg = _build(TaskConfig, raw, "")
+  cfg = _build(TaskConfig, _with_added_keys(raw), "")
   cfg.validate()
   return cfg
 
