@@ -60,7 +60,7 @@ def test_bad_physics_config_fails_clearly(default_physics):
         compile_model(get_robot(1), "", dataclasses.replace(default_physics, **{name: bad}))
 
 
-def test_contact_limits_reach_mjx_and_not_the_c_engine(default_physics):
+def test_contact_limits_become_mjx_numerics_and_its_contact_slots(default_physics):
   """contact_slots / box_pairs become MJX's max_contact_points / max_geom_pairs numerics (MJX then
   keeps that many contact slots); -1 writes none, and MJX keeps a slot for every possible contact."""
   import jax.numpy as jnp
