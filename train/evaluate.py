@@ -89,26 +89,28 @@ def per_trial_figures(acc) -> dict:
   return {**episode_figures(acc, acc["length"]), "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
 
 
-def run_trials(cfg: TaskConfig, act, trials: int, eps: float, seed: int, record: bool = False):
+def run_trials(cfg: TaskConfig, make_act, params, trials: int, eps: float, seed: int, record: bool = False):
   """Per-trial figures with each trial's final chassis position, and, if record, qpos of trial 0
-  at every step and a C model of its scene."""
+  at every step and a C model of its scene; actions make_act(params)(obs)."""
   import jax  # noqa: PLC0415
-  core, rollout = trial_rollout(cfg, lambda _: act, trials, eps)
-  acc, qpos, scene0 = jax.jit(rollout)(None, trial_keys(trials, seed))
+  core, rollout = trial_rollout(cfg, make_act, trials, eps)
+  acc, qpos, scene0 = jax.jit(rollout)(params, trial_keys(trials, seed))
   # trial 0's scene in a C model, for rendering its recorded qpos
   render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
   return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
 
 
 def _policy(run_dir: str, checkpoint: str | None):
-  """(act, step) of the exported policy, or of a checkpoint ('latest' or a step number)."""
-  from train.policy import load_checkpoint_policy, load_policy, load_policy_info  # noqa: PLC0415
+  """(make_act, params, step) of the exported policy, or of a checkpoint ('latest' or a step number)."""
+  from train.policy import act_from_params, load_checkpoint_params, load_policy_info, load_policy_params  # noqa: PLC0415
   if checkpoint is None:
     policy_dir = os.path.join(run_dir, "policy")
-    return load_policy(policy_dir), load_policy_info(policy_dir).get("step")
+    spec, params = load_policy_params(policy_dir)
+    return act_from_params(spec), params, load_policy_info(policy_dir).get("step")
   if checkpoint != "latest" and not checkpoint.isdigit():
     raise ValueError(f"--checkpoint takes a step number (or nothing, for the latest), got {checkpoint!r}")
-  return load_checkpoint_policy(run_dir, None if checkpoint == "latest" else int(checkpoint))
+  spec, params, step = load_checkpoint_params(run_dir, None if checkpoint == "latest" else int(checkpoint))
+  return act_from_params(spec), params, step
 
 
 def _record_trials(args: argparse.Namespace, run_id: str, per_trial: dict) -> None:
@@ -156,11 +158,12 @@ def main(argv: list[str] | None = None) -> int:
     meta = json.load(f)
   try:
     cfg = scene_config(from_dict(meta["config"]), args.scene)
-    act, policy_step = _policy(args.run_dir, args.checkpoint)
+    make_act, params, policy_step = _policy(args.run_dir, args.checkpoint)
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
-  per_trial, qpos, render_model = run_trials(cfg, act, args.trials, args.eps, args.seed, bool(args.video))
+  per_trial, qpos, render_model = run_trials(cfg, make_act, params, args.trials, args.eps, args.seed,
+                                             bool(args.video))
   stats = {k: {"mean": float(v.mean()), "std": float(v.std())} for k, v in per_trial.items()}
   report = {
       "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": args.scene,

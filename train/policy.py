@@ -30,24 +30,37 @@ def load_policy_info(path: str) -> dict:
 
 def load_policy(path: str, deterministic: bool = True):
   """A jitted function mapping an observation (or a batch) to an action."""
-  info = load_policy_info(path)
-  spec = NetworkSpec.from_json(info["network"])
+  spec, params = load_policy_params(path)
+  return make_act(spec, params, deterministic)
+
+
+def load_policy_params(path: str):
+  """(network spec, (normalizer, policy) parameters) of an exported policy."""
+  spec = NetworkSpec.from_json(load_policy_info(path)["network"])
   try:
     raw = ocp.StandardCheckpointer().restore(os.path.join(os.path.abspath(path), "params"))
   except Exception as e:  # orbax raises several types for missing / corrupt files
     raise ValueError(f"cannot read policy parameters in {path}: {e}") from e
-  return make_act(spec, serialization.from_state_dict(spec.init_policy_params(), raw), deterministic)
+  return spec, serialization.from_state_dict(spec.init_policy_params(), raw)
+
+
+def act_from_params(spec: NetworkSpec, deterministic: bool = True):
+  """make_act(params) -> act(observation): the parameters stay arguments of whatever jits it, so
+  one compilation serves every checkpoint of a run."""
+  inference = spec.make_inference_fn()
+  key = jax.random.PRNGKey(0)  # unused by the deterministic policy
+  return lambda params: (lambda obs: inference(params, deterministic=deterministic)(obs, key)[0])
 
 
 def make_act(spec: NetworkSpec, params, deterministic: bool = True):
   """A jitted act(observation) from (normalizer, policy) parameters."""
-  inference = spec.make_inference_fn()(params, deterministic=deterministic)
-  key = jax.random.PRNGKey(0)
-  return jax.jit(lambda obs: inference(obs, key)[0])
+  act = act_from_params(spec, deterministic)
+  return jax.jit(lambda obs: act(params)(obs))
 
 
-def load_checkpoint_policy(run_dir: str, step: int | None = None, deterministic: bool = True):
-  """(act, step) of a training checkpoint (default: the latest), e.g. of a killed run."""
+def load_checkpoint_params(run_dir: str, step: int | None = None):
+  """(network spec, (normalizer, policy) parameters, step) of a training checkpoint (default: the
+  latest), e.g. of a killed run."""
   from train.checkpoints import RunCheckpoints, checkpoint_dir, policy_params, saved_steps  # noqa: PLC0415
   steps = saved_steps(run_dir)
   if not steps:
@@ -60,4 +73,10 @@ def load_checkpoint_policy(run_dir: str, step: int | None = None, deterministic:
   except Exception as e:  # orbax raises several types for missing or damaged files
     raise ValueError(f"cannot read checkpoint {step if step is not None else 'latest'} in {ckpts.dir}: {e}") from e
   spec = NetworkSpec.from_json(meta["network"])
-  return make_act(spec, policy_params(raw, spec), deterministic), int(meta["step"])
+  return spec, policy_params(raw, spec), int(meta["step"])
+
+
+def load_checkpoint_policy(run_dir: str, step: int | None = None, deterministic: bool = True):
+  """(act, step) of a training checkpoint (default: the latest), e.g. of a killed run."""
+  spec, params, step = load_checkpoint_params(run_dir, step)
+  return make_act(spec, params, deterministic), step
