@@ -13,7 +13,6 @@ import json
 import sys
 
 import jax
-import jax.numpy as jnp
 
 import mjx_tracks
 from mjx_tracks.envs.wrappers import batched_env
