@@ -12,12 +12,9 @@ import argparse
 import json
 import sys
 
-import jax
-
 import mjx_tracks
-from mjx_tracks.envs.wrappers import batched_env
 from mjx_tracks.sim import mjx_private
-from bench_env import timed
+from bench_env import time_env_step
 from result_file import write_result
 
 VARIANTS = {  # name -> config overrides; the first is the reference
@@ -42,13 +39,9 @@ def parse_variant(text: str) -> tuple[str, tuple[str, ...]]:
 def measure(task: str, overrides: tuple[str, ...], n: int, reps: int) -> dict:
   """Control steps/s of n robots under the overrides, and the compile time."""
   core = mjx_tracks.load(task, overrides)
-  env = batched_env(core)
-  state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), n))
-  actions = lambda i: (jax.random.uniform(jax.random.PRNGKey(i), (n, core.action_size), minval=-1, maxval=1),)
-  compile_s, step_s = timed(jax.jit(env.step), state, actions, reps)
-  rows = mjx_private.efc_rows(state.pipeline_state.data)
+  state, compile_s, step_s = time_env_step(core, n, reps)
   return {"control_steps_per_s": round(n / step_s), "compile_s": round(compile_s, 1),
-          "substeps": core.substeps, "constraint_rows": rows}
+          "substeps": core.substeps, "constraint_rows": mjx_private.efc_rows(state.pipeline_state.data)}
 
 
 def main(argv=None) -> int:

@@ -30,6 +30,15 @@ def timed(fn, state, make_args, reps):
   return compile_s, (time.time() - t) / reps
 
 
+def time_env_step(core, n: int, reps: int):
+  """(first state, compile s, s per batched step) of the task's batched env, n robots, random actions."""
+  env = batched_env(core)
+  state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), n))
+  actions = lambda i: (jax.random.uniform(jax.random.PRNGKey(i), (n, core.action_size), minval=-1, maxval=1),)
+  compile_s, step_s = timed(jax.jit(env.step), state, actions, reps)
+  return state, compile_s, step_s
+
+
 def main(argv=None) -> int:
   p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   p.add_argument("--task", default="asc-inc-cog")
@@ -38,13 +47,10 @@ def main(argv=None) -> int:
   p.add_argument("--out")
   args = p.parse_args(argv)
   core = mjx_tracks.load(args.task)
-  env = batched_env(core)
   sim, k = core.sim, core.substeps
   rows = []
   for n in [int(x) for x in args.envs.split(",")]:
-    state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), n))
-    actions = lambda i: (jax.random.uniform(jax.random.PRNGKey(i), (n, core.action_size), minval=-1, maxval=1),)
-    env_compile, env_s = timed(jax.jit(env.step), state, actions, args.reps)
+    state, env_compile, env_s = time_env_step(core, n, args.reps)
 
     def bare(es, belts, targets):  # the simulator alone on the same scenes
       m = sim.with_boxes(es.scene.box_pos, es.scene.box_size)

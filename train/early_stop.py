@@ -6,9 +6,12 @@ from __future__ import annotations
 
 import dataclasses
 
+from train.db import STAT_SOURCES
+
 EARLY_STOP_RETURN = {"up": 0.5, "down": 0.6}  # the paper's thresholds, by stair direction
 EARLY_STOP_SUCCESS = 0.97  # success on the hardest staircase
-CRITERIA = {"return": ("train", "return_mean"), "success": ("hardest", "success_rate")}  # -> report source, column
+TRAIN, _, HARDEST = STAT_SOURCES
+CRITERIA = {"return": (TRAIN, "return_mean"), "success": (HARDEST, "success_rate")}  # -> report source, column
 
 
 @dataclasses.dataclass(frozen=True)
@@ -21,7 +24,7 @@ class EarlyStop:
 
   @property
   def needs_probe(self) -> bool:
-    return CRITERIA[self.metric][0] == "hardest"
+    return CRITERIA[self.metric][0] == HARDEST
 
   def met(self, row: dict) -> bool:
     """Whether a report row (train.progress.Reporter) reaches the threshold."""

@@ -10,6 +10,7 @@ import numpy as np
 
 from mjx_tracks.envs.episode_stats import episode_figures
 from mjx_tracks.envs.task_env import METRICS
+from train.db import STAT_SOURCES
 from train.probe import PREFIX as PROBE
 
 
@@ -35,14 +36,15 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
   return {k: float(v) for k, v in out.items() if v is not None}
 
 
-LABELS = {"train": "train", "eval": "eval ", "hardest": "hard "}  # a row's source -> its line's tag
+TRAIN, EVAL, HARDEST = STAT_SOURCES
+LABELS = {TRAIN: "train", EVAL: "eval ", HARDEST: "hard "}  # a row's source -> its line's tag
 
 
 def _source(metrics: dict) -> str:
-  """Which kind of report the metrics are (train.db.STAT_SOURCES)."""
+  """Which kind of report the metrics are."""
   if any(k.startswith(PROBE) for k in metrics):
-    return "hardest"
-  return "eval" if any(k.startswith("eval/") for k in metrics) else "train"
+    return HARDEST
+  return EVAL if any(k.startswith("eval/") for k in metrics) else TRAIN
 
 
 class Reporter:
@@ -71,15 +73,14 @@ class Reporter:
     row = {"step": step, "wall_s": now - self.t0, "steps_per_s": sps, "eps": eps, **fig,
            "source": _source(metrics)}
     figures = {k: v for k, v in row.items() if v is not None and k != "source"}
-    if fig and row["source"] == "hardest":  # the summary's figures: the last probe, and
+    if fig and row["source"] == HARDEST:  # the summary's figures: the last probe, and
       self.latest_hardest = {f"hardest_{k}": v for k, v in fig.items()}
     elif fig:  # the last report or evaluation
       self.latest = figures
     self._print(row)
     scalars = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
     if self.writer:
-      summary = {f"summary/{k}": v for k, v in row.items() if v is not None and k != "source"}
-      for k, v in {**scalars, **summary}.items():
+      for k, v in {**scalars, **{f"summary/{k}": v for k, v in figures.items()}}.items():
         self.writer.add_scalar(k, v, step)
       self.writer.flush()
     if self.db is not None and fig:
