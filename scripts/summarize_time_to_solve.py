@@ -15,6 +15,7 @@ import statistics
 import sys
 
 from results_table import log_header, write_summary
+from train.early_stop import EARLY_STOP_SUCCESS
 
 
 def seed_row(log_path: str) -> dict:
@@ -40,7 +41,7 @@ def main(folder: str) -> None:
     lines.append(f"| {seed} | {cell(r['step'], '{:,}')} | {r['reason']} | {cell(r['compile_s'], '{:.0f}')} | "
                  f"{cell(r['process_wall_s'], '{:.0f}')} | {cell(r['hardest_success'], '{:.2f}')} |")
   solved = [r["process_wall_s"] for r in rows.values() if r["hardest_success"] is not None
-            and r["hardest_success"] >= 0.97 and r["process_wall_s"] is not None]
+            and r["hardest_success"] >= EARLY_STOP_SUCCESS and r["process_wall_s"] is not None]
   median = statistics.median(solved) if len(solved) == len(rows) and rows else None
   lines.append(f"| median | | | | {median:.0f} | |" if median is not None else
                f"| median | | | | - ({len(solved)} of {len(rows)} seeds solved) | |")

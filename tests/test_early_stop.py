@@ -1,5 +1,6 @@
 """Early-stop criteria and the loop's evaluation cadence, with a fake learner (no compilation)."""
 
+import time
 import types
 
 import pytest
@@ -33,7 +34,7 @@ class FakeReporter:
   def __call__(self, step, metrics):
     source = "hardest" if "hardest/success_rate" in metrics else "train"
     row = {"step": step, "source": source, "success_rate": metrics.get("hardest/success_rate"),
-           "return_mean": metrics.get("episode/sum_reward")}
+           "return_mean": metrics.get("episode/sum_reward"), "steps_per_s": metrics.get("training/steps_per_s")}
     self.rows.append(row)
     return row
 
@@ -63,3 +64,29 @@ def test_a_return_criterion_ignores_the_probe_and_a_run_without_one_goes_to_the_
   assert (lambda r: (r.reason, r.step))(loop.run(0, 0, 1_000)) == ("early_stop", 100)
   loop, _ = _loop([1.0] * 10, None)
   assert loop.run(0, 0, 1_000).step == 1_000
+
+
+class DispatchedState:
+  """An update's result still computing: the first wait for it takes 50 ms (asynchronous dispatch)."""
+
+  def __init__(self):
+    self.waited = False
+
+  def block_until_ready(self):
+    if not self.waited:
+      time.sleep(0.05)
+      self.waited = True
+    return self
+
+
+def test_time_of_updates_still_running_when_an_evaluation_starts_counts_as_training():
+  update = lambda s: (DispatchedState(), {"episode/sum_reward": 0.1, "episode/count": 1.0})
+  ckpt = Checkpointer(None, {}, None, lambda step: None, every_s=1e9)
+  reporter = FakeReporter()
+  probe = lambda s: (s.block_until_ready(), {"hardest/success_rate": 0.0})[1]  # waits like an evaluation
+  loop = Loop(update, 100, ckpt, reporter, 200, types.SimpleNamespace(requested=None), None,
+              probe=probe, probe_every=100)
+  loop.run(DispatchedState(), 0, 1_000)
+  rates = [r["steps_per_s"] for r in reporter.rows if r["source"] == "train"]
+  # 100 steps per >= 50 ms wait; the first window holds one wait (its second is the next one's)
+  assert len(rates) == 5 and rates[0] < 4_100 and all(r < 2_100 for r in rates[1:]), rates

@@ -116,7 +116,9 @@ class Loop:
     return (step // every + 1) * every
 
   def _paused(self, fn, *args):
-    """fn(*args), its time left out of the training throughput."""
+    """fn(*args), its time left out of the training throughput; the updates already dispatched
+    finish first, so their time stays in it."""
+    jax.block_until_ready(args)
     t0 = time.monotonic()
     out = fn(*args)
     self.paused_s += time.monotonic() - t0
