@@ -4,7 +4,7 @@
 # (default "0 1 2"); each policy is evaluated on the
 # hardest staircase (100 trials). With 2 GPUs (PAIRED=1, default), the first of GPUS (default
 # "0 1") runs ours and the second Brax's, side by side; with PAIRED=0 both run one after the other
-# on the first.
+# on the first. ONLY=ours or ONLY=brax runs that trainer's seeds alone, on the first of GPUS.
 # Writes $OUT/<impl>_s<seed>_{train.log,eval_hardest.json}; then
 # `python scripts/summarize_parity.py $OUT` writes parity.md / parity.json.
 set -uo pipefail
@@ -30,7 +30,9 @@ pipeline() {  # IMPL GPU: train and evaluate each seed
 }
 mkdir -p /tmp/parity
 read -r gpu_a gpu_b <<< "${GPUS:-0 1}"
-if [ "${PAIRED:-1}" = 1 ]; then
+if [ -n "${ONLY:-}" ]; then
+  pipeline "$ONLY" "$gpu_a"
+elif [ "${PAIRED:-1}" = 1 ]; then
   pipeline ours "$gpu_a" &
   pipeline brax "$gpu_b"
   wait
