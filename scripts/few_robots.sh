@@ -13,9 +13,10 @@ mkdir -p /tmp/few
 steps=${STEPS:-20000}
 cmd="python3 -m train.run --task asc-inc-cog --algo sac --preset paper --steps $steps --out $run --db /tmp/few/$backend.sqlite"
 log="$OUT/few_$backend.log"
-if [ "$backend" = cpu ]; then device="$(lscpu | grep 'Model name' | sed 's/ *Model name: *//'), $(nproc) cores"
+platform=""  # the GPU is JAX's default where there is one
+if [ "$backend" = cpu ]; then platform=cpu; device="$(lscpu | grep 'Model name' | sed 's/ *Model name: *//'), $(nproc) cores"
 else device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1)"; fi
-{ echo "command: JAX_PLATFORMS=$backend $cmd"; echo "device: $device, date: $(date -u +%FT%TZ)"; } > "$log"
+{ echo "command: JAX_PLATFORMS=$platform $cmd"; echo "device: $device, date: $(date -u +%FT%TZ)"; } > "$log"
 t0=$EPOCHREALTIME
-JAX_PLATFORMS=$backend MJX_TRACKS_CACHE=/tmp/few/cache_$backend $cmd 2>&1 | grep -v -i "warp\|warn" >> "$log"
+JAX_PLATFORMS=$platform MJX_TRACKS_CACHE=/tmp/few/cache_$backend $cmd 2>&1 | grep -v -i "warp\|warn" >> "$log"
 echo "process wall_s $(awk "BEGIN {print $EPOCHREALTIME - $t0}") for $steps control steps" >> "$log"
