@@ -6,17 +6,21 @@ import types
 import pytest
 
 from mjx_tracks.envs.config import load_config
-from train.early_stop import EARLY_STOP_RETURN, EARLY_STOP_SUCCESS, EarlyStop, parse_early_stop
+from train.early_stop import EARLY_STOP_RETURN, EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, EarlyStop, parse_early_stop
 from train.loop import Checkpointer, Loop
 
 
 def test_criteria_parse_with_their_defaults_and_name_bad_input():
   up, nav = load_config("asc-inc-cog", ()), load_config("nav", ())
   assert parse_early_stop("return", up) == EarlyStop("return", EARLY_STOP_RETURN["up"])
-  assert parse_early_stop("success", up) == EarlyStop("success", EARLY_STOP_SUCCESS)
+  assert parse_early_stop("success", up) == EarlyStop("success", EARLY_STOP_SUCCESS, EARLY_STOP_TIMES["success"])
+  assert parse_early_stop("success=0.9x3", up) == EarlyStop("success", 0.9, 3)
+  assert parse_early_stop("return=x2", up) == EarlyStop("return", EARLY_STOP_RETURN["up"], 2)
+  assert parse_early_stop(str(EarlyStop("success", 0.97, 2)), up) == EarlyStop("success", 0.97, 2)
   assert parse_early_stop("success=0.5", up).threshold == 0.5 and str(parse_early_stop("return=0.25", up)) == "return=0.25"
   for text, words in (("speed", "one of return, success"), ("success=abc", "not a number"),
-                      ("success=1.5", r"in \[0, 1\]")):
+                      ("success=1.5", r"in \[0, 1\]"),
+                      ("success=0.9x0", "count of reports in a row"), ("success=0.9xa", "count of reports")):
     with pytest.raises(ValueError, match=words):
       parse_early_stop(text, up)
   with pytest.raises(ValueError, match="no hardest staircase"):
@@ -55,6 +59,12 @@ def test_the_loop_stops_at_the_first_probe_reaching_the_success_threshold():
   result = loop.run(0, 0, 10_000)
   assert result.reason == "early_stop" and result.step == 900 and result.state == 9
   assert [r["step"] for r in reporter.rows if r["source"] == "hardest"] == [300, 600, 900]
+
+
+def test_a_criterion_of_two_in_a_row_waits_for_two_probes_in_a_row():
+  loop, reporter = _loop([0.5, 0.98, 0.96, 0.98, 0.99, 1.0], EarlyStop("success", 0.97, 2))
+  result = loop.run(0, 0, 10_000)
+  assert result.reason == "early_stop" and result.step == 1_500  # the training reports between do not count
 
 
 def test_a_return_criterion_ignores_the_probe_and_a_run_without_one_goes_to_the_end():

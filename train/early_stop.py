@@ -1,6 +1,7 @@
 """Early-stop criteria of a run: `return[=X]`, the paper's (mean return of the training episodes
 finished since the last report), or `success[=X]` (success of the hardest-staircase probe,
-train.probe, which is the final `train.evaluate --scene hardest`)."""
+train.probe, the trials of the final `train.evaluate --scene hardest`), each optionally `xN`:
+met by N reports in a row."""
 
 from __future__ import annotations
 
@@ -10,6 +11,9 @@ from train.db import STAT_SOURCES
 
 EARLY_STOP_RETURN = {"up": 0.5, "down": 0.6}  # the paper's thresholds, by stair direction
 EARLY_STOP_SUCCESS = 0.97  # success on the hardest staircase
+# reports in a row that must meet a criterion: two probes for success, since a policy that just
+# reached 0.97 in one probe can score a few trials less in another compilation of the same trials
+EARLY_STOP_TIMES = {"return": 1, "success": 2}
 TRAIN, _, HARDEST = STAT_SOURCES
 CRITERIA = {"return": (TRAIN, "return_mean"), "success": (HARDEST, "success_rate")}  # -> report source, column
 
@@ -18,9 +22,10 @@ CRITERIA = {"return": (TRAIN, "return_mean"), "success": (HARDEST, "success_rate
 class EarlyStop:
   metric: str  # CRITERIA
   threshold: float
+  times: int = 1  # reports of the criterion's source in a row that must meet it
 
   def __str__(self) -> str:
-    return f"{self.metric}={self.threshold:g}"
+    return f"{self.metric}={self.threshold:g}" + (f"x{self.times}" if self.times != 1 else "")
 
   @property
   def needs_probe(self) -> bool:
@@ -31,13 +36,31 @@ class EarlyStop:
     source, column = CRITERIA[self.metric]
     return row.get("source") == source and row.get(column) is not None and row[column] >= self.threshold
 
+  def streak(self, streak: int, row: dict) -> int:
+    """Reports in a row meeting the criterion, after this row (rows of other sources leave it)."""
+    if row.get("source") != CRITERIA[self.metric][0]:
+      return streak
+    return streak + 1 if self.met(row) else 0
+
+
+def _times(text: str, metric: str, value: str) -> tuple[str, int]:
+  """(threshold text, times) of 'X', 'XxN' or ''."""
+  value, sep, times = value.partition("x")
+  if not sep:
+    return value, EARLY_STOP_TIMES[metric]
+  if not times.isdigit() or int(times) < 1:
+    raise ValueError(f"--early-stop {text}: after 'x' comes a count of reports in a row (>= 1), got {times!r}")
+  return value, int(times)
+
 
 def parse_early_stop(text: str, cfg) -> EarlyStop:
-  """'return', 'return=0.5', 'success', 'success=0.97' -> EarlyStop; ValueError naming the fault."""
+  """'return', 'return=0.5', 'success', 'success=0.97', 'success=0.97x3' -> EarlyStop; ValueError
+  naming the fault."""
   metric, _, value = text.partition("=")
   if metric not in CRITERIA:
     raise ValueError(f"--early-stop {text}: the criterion is one of {', '.join(CRITERIA)} "
-                     "(optionally =THRESHOLD)")
+                     "(optionally =THRESHOLD[xN])")
+  value, times = _times(text, metric, value)
   if value:
     try:
       threshold = float(value)
@@ -53,4 +76,4 @@ def parse_early_stop(text: str, cfg) -> EarlyStop:
     raise ValueError(f"--early-stop {text}: a success threshold is in [0, 1]")
   if metric == "success" and cfg.scene.kind != "stairs":
     raise ValueError(f"--early-stop success: task {cfg.task} has no hardest staircase; use return=X")
-  return EarlyStop(metric, threshold)
+  return EarlyStop(metric, threshold, times)

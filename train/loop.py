@@ -86,7 +86,7 @@ class Loop:
     next_report, next_evals = step + self.report_every, [self._next(step, e) for _, e in self.evals]
     self.checkpointer.last_t = self.mark_t = time.monotonic()
     self.mark_step, self.paused_s = step, 0.0
-    reason = "done"
+    reason, streak = "done", 0
     while step < total and reason == "done":
       stop, ckpt = _agree(self.stop.requested is not None, self.checkpointer.due())
       if stop:
@@ -105,7 +105,9 @@ class Loop:
         if step >= next_evals[i]:
           rows.append(self.reporter(step, self._paused(evaluate, state)))
           next_evals[i] = self._next(step, every)
-      if self.early is not None and any(self.early.met(r) for r in rows):
+      for r in rows if self.early is not None else ():
+        streak = self.early.streak(streak, r)
+      if self.early is not None and streak >= self.early.times:
         reason = "early_stop"
     if pending:
       self._report(step, acc, pending)

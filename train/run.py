@@ -23,7 +23,7 @@ import sys
 from mjx_tracks.envs.config import ConfigError
 from train.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
-from train.early_stop import EARLY_STOP_SUCCESS
+from train.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
 from train.plan import RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
@@ -47,7 +47,8 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--early-stop", nargs="?", const="return", metavar="CRITERION",
                  help="stop at a criterion: 'return' (alone: the mean return of recent training episodes "
                       "reaches the paper's 0.5 ascent / 0.6 descent), 'success' (the hardest-staircase "
-                      f"probe's success reaches {EARLY_STOP_SUCCESS}), or either with =THRESHOLD")
+                      f"probe's success reaches {EARLY_STOP_SUCCESS} in {EARLY_STOP_TIMES['success']} probes "
+                      "in a row), or either with =THRESHOLD[xN] (N reports in a row)")
   p.add_argument("--probe-every", type=int, metavar="STEPS",
                  help="steps between evaluations on the hardest staircase (the trials of train.evaluate "
                       "--scene hardest); 0: none (default: the preset's, stair tasks only)")
