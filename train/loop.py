@@ -105,10 +105,10 @@ class Loop:
         if step >= next_evals[i]:
           rows.append(self.reporter(step, self._paused(evaluate, state)))
           next_evals[i] = self._next(step, every)
-      for r in rows if self.early is not None else ():
-        streak = self.early.streak(streak, r)
-      if self.early is not None and streak >= self.early.times:
-        reason = "early_stop"
+      if self.early is not None:
+        for r in rows:
+          streak = self.early.streak(streak, r)
+        reason = "early_stop" if streak >= self.early.times else reason
     if pending:
       self._report(step, acc, pending)
     return LoopResult(state, step, reason)
