@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the wheel from a copy of the checkout's files (so no build/ is left in the repository),
 # installs it (no dependencies: they are already installed) into a folder outside the repository,
-# and loads a task from there: the configs must ship as package data.
+# and loads a task and a shipped study from there: the configs must ship as package data, and every
+# train subpackage must be in the wheel.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 tmp=$(mktemp -d)
@@ -19,5 +20,8 @@ assert mjx_tracks.__file__.startswith(sys.argv[1]), f"imported {mjx_tracks.__fil
 tasks = available_tasks()
 assert "asc-inc-cog" in tasks, tasks
 cfg = load_config("asc-inc-cog")
-print(f"wheel: {len(tasks)} tasks load from {sys.argv[1]} (asc-inc-cog: {cfg.scene.variant} curriculum)")
+import train.algos.ppo, train.study.spec  # noqa: E401  (subpackages are listed in pyproject.toml)
+assert train.study.spec.__file__.startswith(sys.argv[1]), train.study.spec.__file__
+runs = train.study.spec.cells(train.study.spec.load_study("paper"))
+print(f"wheel: {len(tasks)} tasks and the paper study ({len(runs)} runs) load from {sys.argv[1]}")
 PY

@@ -230,6 +230,11 @@ def _build(cls, raw: dict, key: str):
   return cls(**{k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()})
 
 
+def parse_mapping(cls, raw: dict, key: str = ""):
+  """A config dataclass from a plain mapping, every key and type checked (ConfigError names the key)."""
+  return _build(cls, raw, key)
+
+
 def _merge(base: dict, over: dict, key: str = "") -> dict:
   out = dict(base)
   for k, v in over.items():
@@ -240,7 +245,8 @@ def _merge(base: dict, over: dict, key: str = "") -> dict:
   return out
 
 
-def _apply_override(raw: dict, item: str) -> dict:
+def apply_override(raw: dict, item: str) -> dict:
+  """raw with one dotted KEY=VALUE override (VALUE read as YAML) merged in."""
   key, sep, value = item.partition("=")
   if not sep or not key:
     raise ConfigError(f"override {item!r}: expected KEY=VALUE, e.g. reward.cog_scale=0.5")
@@ -291,7 +297,7 @@ def default_config(overrides: typing.Sequence[str] = ()) -> TaskConfig:
   """configs/defaults.yaml alone (plus overrides): the defaults of every key."""
   raw = {"task": DEFAULTS, **_read_yaml(DEFAULTS)}
   for item in overrides:
-    raw = _apply_override(raw, item)
+    raw = apply_override(raw, item)
   return from_dict(raw)
 
 
@@ -301,5 +307,5 @@ def load_config(task: str, overrides: typing.Sequence[str] = ()) -> TaskConfig:
     raise ConfigError(f"unknown task {task!r}; available: {', '.join(available_tasks())}")
   raw = _merge({"task": task, **_read_yaml(DEFAULTS)}, _read_yaml(task))
   for item in overrides:
-    raw = _apply_override(raw, item)
+    raw = apply_override(raw, item)
   return from_dict(raw)

@@ -1,0 +1,60 @@
+"""Study descriptions: validation names the faulty key, the grid has one run per combination, and
+each run's arguments plan like a `train.run` command line (no compilation)."""
+
+import pathlib
+
+import pytest
+
+from mjx_tracks.envs.config import ConfigError
+from train.plan import plan_run
+from train.run import parser as run_parser
+from train.study.__main__ import main as study_main
+from train.study.spec import cells, load_study, study_from_dict
+
+STUDIES = pathlib.Path(__file__).resolve().parents[1] / "configs" / "studies"
+GROUP = {"name": "ppo", "algo": "ppo", "preset": "cpu", "steps": [512, 1024]}
+STUDY = {"name": "s", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1, 2], "groups": [GROUP]}
+
+
+def test_the_grid_has_one_run_per_group_task_budget_and_seed():
+  spec = study_from_dict({**STUDY, "groups": [GROUP, {**GROUP, "name": "sac", "algo": "sac", "steps": [64]}]})
+  runs = cells(spec)
+  assert len(runs) == 2 * 3 * (2 + 1) and len({c.id for c in runs}) == len(runs)
+  assert {(c.group, c.steps) for c in runs} == {("ppo", 512), ("ppo", 1024), ("sac", 64)}
+  assert spec.retries == 1 and spec.eval_trials == 100  # the defaults
+
+
+def test_a_run_plans_like_its_command_line(tmp_path):
+  spec = study_from_dict({**STUDY, "groups": [{**GROUP, "early_stop": "success=0.9x3", "set": ["reward.cog_scale=0.25"]}]})
+  c = cells(spec)[-1]
+  plan = plan_run(run_parser().parse_args(c.run_args(str(tmp_path / "run"), str(tmp_path / "db.sqlite"))))
+  assert (plan.task, plan.algo, plan.preset_name, plan.total_steps, plan.seed) == ("asc-uni-cog", "ppo", "cpu", 1024, 2)
+  assert plan.cfg.reward.cog_scale == 0.25 and str(plan.early_stop) == "success=0.9x3"
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"seedz": [0]}, "seedz: unknown key"),
+    ({"tasks": ["asc-inc-cgo"]}, "unknown task 'asc-inc-cgo'"),
+    ({"seeds": [0, 0]}, "seeds: distinct"),
+    ({"name": "a/b"}, "not a plain name"),
+    ({"groups": []}, "groups: must be a non-empty list"),
+    ({"groups": [{**GROUP, "stepz": [1]}]}, r"groups\[0\].stepz: unknown key"),
+    ({"groups": [{**GROUP, "preset": "huge"}]}, "unknown preset 'huge'"),
+    ({"groups": [{**GROUP, "steps": [0]}]}, "budgets >= 1"),
+    ({"groups": [GROUP, GROUP]}, "group names repeat"),
+    ({"groups": [{**GROUP, "set": ["reward.cog_scal=1"]}]}, r"groups\[0\] \(ppo\) on asc-inc-cog: reward.cog_scal: unknown key"),
+    ({"tasks": ["nav"], "groups": [{**GROUP, "early_stop": "success"}]}, "nav has no hardest staircase"),
+])
+def test_bad_studies_fail_naming_the_fault(change, words):
+  with pytest.raises(ConfigError, match=words):
+    study_from_dict({**STUDY, **change})
+
+
+def test_the_shipped_studies_validate_and_the_command_lists_their_runs(capsys):
+  assert len(cells(load_study("paper"))) == 4 * 5 * (1 + 4)  # a shipped study by name
+  assert study_main([str(STUDIES / "tiny.yaml"), "--plan", "--set", "seeds=[7]"]) == 0
+  lines = capsys.readouterr().out.splitlines()
+  assert len(lines) == 1 + 2 and all("--seed 7 " in line for line in lines[1:])
+  assert study_main(["tiny", "--plan", "--set", "retries=-1"]) == 2
+  assert study_main([str(STUDIES / "nope.yaml"), "--plan"]) == 2
+  assert "no such study file" in capsys.readouterr().err

@@ -1,0 +1,139 @@
+"""A study's description: tasks x seeds x groups (algorithm, preset, config overrides, early stop)
+x step budgets, read from YAML and validated against the tasks, presets and criteria it names;
+expanded into one Cell (a `train.run` invocation) per combination."""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+import re
+
+import yaml
+
+from mjx_tracks.envs.config import ConfigError, apply_override, available_tasks, config_dir, load_config, parse_mapping
+from train.early_stop import parse_early_stop
+from train.presets import get_preset
+
+STUDY_DEFAULTS = {"retries": 1, "eval_trials": 100}
+GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": []}
+NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")  # study and group names: folder names too
+
+
+@dataclasses.dataclass(frozen=True)
+class GroupSpec:
+  """Runs that differ only by task, seed and budget."""
+  name: str
+  algo: str  # ppo | sac
+  preset: str  # train/presets.py
+  steps: tuple[int, ...]  # step budgets: one run each
+  early_stop: str  # an --early-stop criterion, or "" for none
+  set: tuple[str, ...]  # config overrides KEY=VALUE, after the preset's
+
+
+@dataclasses.dataclass(frozen=True)
+class StudySpec:
+  name: str
+  tasks: tuple[str, ...]
+  seeds: tuple[int, ...]
+  groups: tuple[GroupSpec, ...]
+  retries: int  # attempts after a failed one, each from the run's last checkpoint
+  eval_trials: int  # trials per evaluation scene of every finished run
+
+
+@dataclasses.dataclass(frozen=True)
+class Cell:
+  """One run of a study."""
+  group: str
+  task: str
+  steps: int
+  seed: int
+  algo: str
+  preset: str
+  early_stop: str
+  overrides: tuple[str, ...]
+
+  @property
+  def id(self) -> str:
+    return f"{self.group}/{self.task}/{self.steps}/s{self.seed}"
+
+  def run_args(self, out: str, db: str) -> list[str]:
+    """`python -m train.run` arguments of this cell."""
+    args = ["--task", self.task, "--algo", self.algo, "--preset", self.preset, "--steps", str(self.steps),
+            "--seed", str(self.seed), "--out", out, "--db", db]
+    for item in self.overrides:
+      args += ["--set", item]
+    return args + (["--early-stop", self.early_stop] if self.early_stop else [])
+
+
+def _check(cond: bool, key: str, msg: str) -> None:
+  if not cond:
+    raise ConfigError(f"{key}: {msg}")
+
+
+def _group(raw, i: int) -> GroupSpec:
+  key = f"groups[{i}]"
+  _check(isinstance(raw, dict), key, f"must be a mapping, got {raw!r}")
+  g = parse_mapping(GroupSpec, {**GROUP_DEFAULTS, **raw}, key)
+  _check(bool(NAME.match(g.name)), f"{key}.name", f"{g.name!r} is not a plain name (letters, digits, _ . -)")
+  try:
+    get_preset(g.algo, g.preset)
+  except ValueError as e:
+    raise ConfigError(f"{key}: {e}") from None
+  _check(bool(g.steps) and all(n >= 1 for n in g.steps), f"{key}.steps", "one or more budgets >= 1")
+  return g
+
+
+def _check_runs(spec: StudySpec) -> None:
+  """Every task's config takes every group's overrides and early stop."""
+  for task in spec.tasks:
+    _check(task in available_tasks(), "tasks", f"unknown task {task!r}; known: {available_tasks()}")
+    for i, g in enumerate(spec.groups):
+      try:
+        cfg = load_config(task, tuple(get_preset(g.algo, g.preset).config_overrides) + g.set)
+        if g.early_stop:
+          parse_early_stop(g.early_stop, cfg)
+      except ValueError as e:  # ConfigError included
+        raise ConfigError(f"groups[{i}] ({g.name}) on {task}: {e}") from None
+
+
+def study_from_dict(raw: dict) -> StudySpec:
+  """A validated StudySpec from a plain mapping."""
+  _check(isinstance(raw, dict), "study", "the top level must be a mapping")
+  raw = {**STUDY_DEFAULTS, **raw}
+  groups = raw.get("groups")
+  _check(isinstance(groups, list) and bool(groups), "groups", "must be a non-empty list")
+  spec = parse_mapping(StudySpec, {**raw, "groups": []}, "")
+  spec = dataclasses.replace(spec, groups=tuple(_group(g, i) for i, g in enumerate(groups)))
+  _check(bool(NAME.match(spec.name)), "name", f"{spec.name!r} is not a plain name (letters, digits, _ . -)")
+  names = [g.name for g in spec.groups]
+  _check(len(set(names)) == len(names), "groups", f"group names repeat: {names}")
+  _check(bool(spec.tasks) and bool(spec.seeds), "tasks / seeds", "each needs one or more entries")
+  _check(len(set(spec.seeds)) == len(spec.seeds) and min(spec.seeds) >= 0, "seeds", "distinct integers >= 0")
+  _check(spec.retries >= 0 and spec.eval_trials >= 1, "retries / eval_trials", "retries >= 0, eval_trials >= 1")
+  _check_runs(spec)
+  return spec
+
+
+def study_text(path: str) -> str:
+  """The YAML of a study file, or of a shipped study by NAME (configs/studies/NAME.yaml)."""
+  p = pathlib.Path(path)
+  if p.is_file():
+    return p.read_text()
+  shipped = config_dir().joinpath("studies", f"{path}.yaml")
+  if shipped.is_file():
+    return shipped.read_text()
+  raise ConfigError(f"{path}: no such study file (nor a shipped study of that name)")
+
+
+def load_study(path: str, overrides: tuple[str, ...] = ()) -> StudySpec:
+  """A study file or shipped study NAME <- top-level KEY=VALUE overrides, validated."""
+  raw = yaml.safe_load(study_text(path)) or {}
+  for item in overrides:
+    raw = apply_override(raw, item)
+  return study_from_dict(raw)
+
+
+def cells(spec: StudySpec) -> list[Cell]:
+  """The study's runs: group x task x budget x seed, in that order."""
+  return [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set)
+          for g in spec.groups for task in spec.tasks for steps in g.steps for seed in spec.seeds]
