@@ -1,6 +1,7 @@
-"""`python -m train.study STUDY --plan [--set KEY=VALUE]`: validate a study (a YAML path, or the
-NAME of one in configs/studies/) and list its runs, one `train.run` command each. Running studies
-(on a Dask cluster) is not built yet."""
+"""`python -m train.study STUDY [--set KEY=VALUE] [--plan]`: run a study (a YAML path, or the NAME
+of one in configs/studies/) on a Dask cluster: by default one started here (a worker per GPU, CPU
+slots), or an existing one (--scheduler). Finished runs of an earlier start are skipped; --plan
+lists the runs and stops."""
 
 from __future__ import annotations
 
@@ -20,7 +21,29 @@ def parser() -> argparse.ArgumentParser:
                  help="top-level override, e.g. --set seeds=[0,1] or --set retries=2")
   p.add_argument("--plan", action="store_true", help="list the runs and stop")
   p.add_argument("--root", default="studies", help="where study folders go (default ./studies)")
+  p.add_argument("--scheduler", metavar="tcp://HOST:8786", help="an existing Dask cluster (its workers "
+                 "declare resources gpu=N and/or cpu=N: their run slots)")
+  p.add_argument("--gpus", help="local GPUs to use, e.g. 0,1 (default: all)")
+  p.add_argument("--slots-per-gpu", type=int, default=1, help="runs at once on one GPU (default 1)")
+  p.add_argument("--cpu-slots", type=int, help="runs at once on the CPU backend (default: 1 without GPUs, else 0)")
   return p
+
+
+def _client(args):
+  """(Dask client, the worker kinds it has)."""
+  from distributed import Client  # noqa: PLC0415
+
+  from train.study.cluster import local_cluster, local_gpus, worker_specs  # noqa: PLC0415
+  if args.scheduler:
+    client = Client(args.scheduler)
+    kinds = {k for w in client.scheduler_info()["workers"].values() for k in w.get("resources", {})}
+    return client, tuple(k for k in ("gpu", "cpu") if k in kinds)
+  gpus = args.gpus.split(",") if args.gpus else local_gpus()
+  cpu = args.cpu_slots if args.cpu_slots is not None else (0 if gpus else 1)
+  if args.slots_per_gpu < 1 or cpu < 0:
+    raise ValueError("--slots-per-gpu must be >= 1 and --cpu-slots >= 0")
+  client = Client(local_cluster(worker_specs(gpus, args.slots_per_gpu, cpu)))
+  return client, tuple(k for k, n in (("gpu", len(gpus)), ("cpu", cpu)) if n)
 
 
 def main(argv=None) -> int:
@@ -30,10 +53,9 @@ def main(argv=None) -> int:
   except ConfigError as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
-  if not args.plan:
-    print("error: running a study is not built yet; --plan lists its runs", file=sys.stderr)
-    return 2
   folder = os.path.join(args.root, spec.name)
+  if not args.plan:
+    return _run(spec, folder, args)
   runs = cells(spec)
   budgets = ", ".join(f"{g.name} {len(g.steps)}" for g in spec.groups)
   print(f"study {spec.name}: {len(runs)} runs = {len(spec.tasks)} tasks x {len(spec.seeds)} seeds x budgets "
@@ -42,6 +64,29 @@ def main(argv=None) -> int:
     args_ = c.run_args(os.path.join(folder, "runs", c.id.replace("/", "_")), os.path.join(folder, "study.sqlite"))
     print(f"{c.id}: python -m train.run {shlex.join(args_)}")
   return 0
+
+
+def _run(spec, folder: str, args) -> int:
+  from train.study.executor import StudyRunner  # noqa: PLC0415
+  try:
+    client, kinds = _client(args)
+  except (ValueError, OSError) as e:
+    print(f"error: {e}", file=sys.stderr)
+    return 2
+  if not kinds:
+    print("error: the cluster has no worker with a gpu or cpu resource", file=sys.stderr)
+    return 2
+  runner = StudyRunner(spec, folder, client, backends=kinds)
+  try:
+    with client:
+      counts = runner.run()
+  except KeyboardInterrupt:
+    n = runner.state.counts()
+    print(f"\ninterrupted: {n['done']} of {sum(n.values())} runs done; the same command continues the study",
+          file=sys.stderr)
+    return 130
+  print(f"study {spec.name}: {counts['done']} runs done, {counts['failed']} failed -> {folder} (state.json)")
+  return 0 if counts["failed"] == 0 else 1
 
 
 if __name__ == "__main__":

@@ -15,7 +15,8 @@ from train.early_stop import parse_early_stop
 from train.presets import get_preset
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": 100}
-GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": []}
+GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu"}
+BACKENDS = ("gpu", "cpu")
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")  # study and group names: folder names too
 
 
@@ -28,6 +29,7 @@ class GroupSpec:
   steps: tuple[int, ...]  # step budgets: one run each
   early_stop: str  # an --early-stop criterion, or "" for none
   set: tuple[str, ...]  # config overrides KEY=VALUE, after the preset's
+  backend: str  # gpu | cpu: the workers that run its cells (cpu: e.g. one-robot runs)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,18 +53,22 @@ class Cell:
   preset: str
   early_stop: str
   overrides: tuple[str, ...]
+  backend: str  # gpu | cpu: which workers run it
 
   @property
   def id(self) -> str:
     return f"{self.group}/{self.task}/{self.steps}/s{self.seed}"
 
-  def run_args(self, out: str, db: str) -> list[str]:
-    """`python -m train.run` arguments of this cell."""
+  def train_args(self) -> list[str]:
+    """`python -m train.run` arguments of this cell, less its run folder and database."""
     args = ["--task", self.task, "--algo", self.algo, "--preset", self.preset, "--steps", str(self.steps),
-            "--seed", str(self.seed), "--out", out, "--db", db]
+            "--seed", str(self.seed)]
     for item in self.overrides:
       args += ["--set", item]
     return args + (["--early-stop", self.early_stop] if self.early_stop else [])
+
+  def run_args(self, out: str, db: str) -> list[str]:
+    return [*self.train_args(), "--out", out, "--db", db]
 
 
 def _check(cond: bool, key: str, msg: str) -> None:
@@ -80,6 +86,7 @@ def _group(raw, i: int) -> GroupSpec:
   except ValueError as e:
     raise ConfigError(f"{key}: {e}") from None
   _check(bool(g.steps) and all(n >= 1 for n in g.steps), f"{key}.steps", "one or more budgets >= 1")
+  _check(g.backend in BACKENDS, f"{key}.backend", f"one of {BACKENDS}, got {g.backend!r}")
   return g
 
 
@@ -135,5 +142,5 @@ def load_study(path: str, overrides: tuple[str, ...] = ()) -> StudySpec:
 
 def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order."""
-  return [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set)
+  return [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend)
           for g in spec.groups for task in spec.tasks for steps in g.steps for seed in spec.seeds]

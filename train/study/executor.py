@@ -1,0 +1,126 @@
+"""Running a study on a Dask cluster: every unfinished cell is submitted as one task
+(`train.study.worker.run_cell`); results come back as tars into STUDY/runs/; failed attempts are
+retried from the last run folder that came back, up to the study's `retries`; the state of every
+cell and its attempts lives in STUDY/state.json, so a study started again skips finished cells."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import shutil
+import sys
+import time
+
+from train.study.spec import Cell, StudySpec, cells
+from train.study.worker import EVALUATE, TRAIN, pack, run_cell, unpack
+
+
+def cell_folder(study_folder: str, cell: Cell) -> str:
+  return os.path.join(study_folder, "runs", cell.id.replace("/", "_"))
+
+
+@dataclasses.dataclass
+class StudyState:
+  """STUDY/state.json: {cell id: {"status": queued|running|done|failed, "attempts": [...]}};
+  running = submitted to the cluster (waiting for a slot or running)."""
+  path: str
+  cells: dict
+
+  @staticmethod
+  def load(folder: str, ids: list[str]) -> "StudyState":
+    path = os.path.join(folder, "state.json")
+    old = json.load(open(path))["cells"] if os.path.exists(path) else {}
+    fresh = {i: {"status": "queued", "attempts": []} for i in ids}
+    for i, c in old.items():
+      if i in fresh:
+        for a in c["attempts"]:
+          if "ended" not in a:  # the study stopped while it ran
+            a.update(ended=None, rc=None, phase=None, worker=None, error="the study stopped during this attempt")
+        fresh[i] = {**c, "status": "done" if c["status"] == "done" else "queued"}
+    return StudyState(path, fresh)
+
+  def save(self) -> None:
+    tmp = self.path + ".tmp"
+    with open(tmp, "w") as f:
+      json.dump({"cells": self.cells}, f, indent=1)
+    os.replace(tmp, self.path)
+
+  def counts(self) -> dict[str, int]:
+    out = {"done": 0, "running": 0, "queued": 0, "failed": 0}
+    for c in self.cells.values():
+      out[c["status"]] += 1
+    return out
+
+
+def _progress(name: str, state: StudyState, t0: float, finished_now: int, stream) -> None:
+  n, elapsed = state.counts(), time.time() - t0
+  left = n["running"] + n["queued"]
+  eta = f", eta {elapsed / finished_now * left:,.0f} s" if finished_now and left else ""
+  print(f"[study] {name}: {n['done']} done, {n['running']} submitted, {n['queued']} to retry, "
+        f"{n['failed']} failed | {elapsed:,.0f} s{eta}", file=stream, flush=True)
+
+
+class StudyRunner:
+  """Submits a study's unfinished cells to a Dask client and follows them to the end."""
+
+  def __init__(self, spec: StudySpec, folder: str, client, commands=(TRAIN, EVALUATE), stream=sys.stdout,
+               backends: tuple[str, ...] = ("gpu", "cpu")):
+    """backends: the worker kinds the cluster has; a cell whose backend is missing runs on the other."""
+    self.spec, self.folder, self.client, self.commands, self.stream = spec, folder, client, commands, stream
+    self.backends = backends
+    self.cells = {c.id: c for c in cells(spec)}
+    os.makedirs(os.path.join(folder, "runs"), exist_ok=True)
+    self.state = StudyState.load(folder, list(self.cells))
+
+  def _submit(self, cid: str):
+    cell, record = self.cells[cid], self.state.cells[cid]
+    local = cell_folder(self.folder, cell)
+    last = record["attempts"][-1] if record["attempts"] else None
+    has_run = os.path.isdir(os.path.join(local, "checkpoints")) and bool(os.listdir(os.path.join(local, "checkpoints")))
+    resume = pack(local) if has_run else None
+    train = not (last and last.get("phase") == "evaluate" and has_run)  # training finished: evaluate again only
+    record["status"] = "running"
+    record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
+    eval_args = ["--scene", "hardest", "--trials", str(self.spec.eval_trials)]
+    backend = cell.backend if cell.backend in self.backends else self.backends[0]
+    return self.client.submit(run_cell, cell.train_args(), eval_args, resume, train, self.commands,
+                              key=f"{cid}/attempt-{len(record['attempts'])}", pure=False, resources={backend: 1})
+
+  def _settle(self, cid: str, future) -> bool:
+    """Records an attempt's outcome; True if the cell should be tried again."""
+    record = self.state.cells[cid]
+    attempt = record["attempts"][-1]
+    try:
+      res = future.result()
+    except Exception as e:  # the task raised, or its worker died (distributed.KilledWorker)
+      res = {"rc": None, "phase": "train", "tar": None, "log_tail": "", "worker": None, "error": repr(e)}
+    if res["tar"] is not None:
+      local = cell_folder(self.folder, self.cells[cid])
+      shutil.rmtree(local, ignore_errors=True)
+      unpack(res["tar"], local)
+    attempt.update(ended=time.time(), rc=res["rc"], phase=res["phase"], worker=res["worker"],
+                   error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
+    retry = res["rc"] != 0 and len(record["attempts"]) <= self.spec.retries
+    record["status"] = "done" if res["rc"] == 0 else "queued" if retry else "failed"
+    return retry
+
+  def run(self) -> dict[str, int]:
+    """Runs every unfinished cell; returns the final counts of done and failed cells."""
+    from distributed import as_completed  # noqa: PLC0415
+    t0, finished = time.time(), 0
+    todo = [cid for cid, c in self.state.cells.items() if c["status"] != "done"]
+    pending = as_completed()
+    for cid in todo:
+      pending.add(self._submit(cid))
+    self.state.save()
+    _progress(self.spec.name, self.state, t0, finished, self.stream)
+    for future in pending:
+      cid = future.key.rsplit("/attempt-", 1)[0]
+      if self._settle(cid, future):
+        pending.add(self._submit(cid))
+      else:
+        finished += 1
+      self.state.save()
+      _progress(self.spec.name, self.state, t0, finished, self.stream)
+    return self.state.counts()

@@ -1,0 +1,68 @@
+"""What runs on a Dask worker: one attempt at a study cell, in a scratch folder of the worker's own
+(no shared filesystem): train (or resume from the run folder sent along), evaluate, and send the
+run folder back as a tar."""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import subprocess
+import sys
+import tarfile
+import tempfile
+
+TRAIN = (sys.executable, "-m", "train.run")
+EVALUATE = (sys.executable, "-m", "train.evaluate")
+RUN_DB = "run.sqlite"  # each run's records travel inside its folder
+
+
+def pack(folder: str) -> bytes:
+  buf = io.BytesIO()
+  with tarfile.open(fileobj=buf, mode="w:gz") as tar:
+    tar.add(folder, arcname=".")
+  return buf.getvalue()
+
+
+def unpack(data: bytes, folder: str) -> None:
+  os.makedirs(folder, exist_ok=True)
+  with tarfile.open(fileobj=io.BytesIO(data), mode="r:gz") as tar:
+    tar.extractall(folder, filter="data")
+
+
+def _call(argv: list[str], log_path: str) -> int:
+  with open(log_path, "a") as log:
+    return subprocess.call(argv, stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
+
+
+def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, train: bool = True,
+             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
+  """{"rc", "phase" (train | evaluate), "tar" (the run folder, or None), "log_tail", "worker"}."""
+  scratch = tempfile.mkdtemp(prefix="study-cell-")
+  out, log = os.path.join(scratch, "run"), os.path.join(scratch, "attempt.log")
+  try:
+    db = os.path.join(out, RUN_DB)
+    if resume is not None:
+      unpack(resume, out)
+    phase, rc = "train", 0
+    if train:
+      given = ["--resume", out] if resume is not None else [*run_args, "--out", out]
+      rc = _call([*commands[0], *given, "--db", db], log)
+    if rc == 0:
+      phase, rc = "evaluate", _call([*commands[1], out, *eval_args, "--db", db], log)
+    tail = open(log).read()[-2000:] if os.path.exists(log) else ""
+    if not os.path.isdir(out):
+      return {"rc": rc, "phase": phase, "tar": None, "log_tail": tail, "worker": _worker_name()}
+    with open(os.path.join(out, "study-attempts.log"), "a") as f:  # every attempt's output, in order
+      f.write(open(log).read() if os.path.exists(log) else "")
+    return {"rc": rc, "phase": phase, "tar": pack(out), "log_tail": tail, "worker": _worker_name()}
+  finally:
+    shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _worker_name() -> str:
+  try:
+    from distributed import get_worker  # noqa: PLC0415
+    return str(get_worker().name)
+  except (ImportError, ValueError):
+    return "local"
