@@ -36,7 +36,8 @@ class StudyState:
       if i in fresh:
         for a in c["attempts"]:
           if "ended" not in a:  # the study stopped while it ran
-            a.update(ended=None, rc=None, phase=None, worker=None, error="the study stopped during this attempt")
+            a.update(ended=None, rc=None, phase=None, worker=None, stopped=True,
+                     error="the study stopped during this attempt")
         fresh[i] = {**c, "status": "done" if c["status"] == "done" else "queued"}
     return StudyState(path, fresh)
 
@@ -77,7 +78,8 @@ class StudyRunner:
     cell, record = self.cells[cid], self.state.cells[cid]
     local = cell_folder(self.folder, cell)
     last = record["attempts"][-1] if record["attempts"] else None
-    has_run = os.path.isdir(os.path.join(local, "checkpoints")) and bool(os.listdir(os.path.join(local, "checkpoints")))
+    ckpts = os.path.join(local, "checkpoints")
+    has_run = os.path.isdir(ckpts) and bool(os.listdir(ckpts))
     resume = pack(local) if has_run else None
     train = not (last and last.get("phase") == "evaluate" and has_run)  # training finished: evaluate again only
     record["status"] = "running"
@@ -101,7 +103,8 @@ class StudyRunner:
       unpack(res["tar"], local)
     attempt.update(ended=time.time(), rc=res["rc"], phase=res["phase"], worker=res["worker"],
                    error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
-    retry = res["rc"] != 0 and len(record["attempts"]) <= self.spec.retries
+    failures = sum(1 for a in record["attempts"] if a["rc"] != 0 and not a.get("stopped"))
+    retry = res["rc"] != 0 and failures <= self.spec.retries
     record["status"] = "done" if res["rc"] == 0 else "queued" if retry else "failed"
     return retry
 
