@@ -155,6 +155,24 @@ class ExperimentDB:
                     f"VALUES (?, {', '.join('?' * len(EVAL_COLUMNS))}, ?)",
                     [[run_id, *[t.get(k) for k in EVAL_COLUMNS], _now()] for t in trials])
 
+  def import_runs(self, src: str, out_dir: str | None = None) -> list[str]:
+    """Copies every run of another database file (e.g. one that came back from a study's worker)
+    into this one, replacing the rows of the same run ids; out_dir, if given, becomes their run
+    folder. Returns the run ids."""
+    tables = ("experiments", "stats", "events", "evals")
+    with self._conn() as c:
+      c.execute("ATTACH DATABASE ? AS src", (src,))
+      ids = [r[0] for r in c.execute("SELECT run_id FROM src.experiments")]
+      for table in reversed(tables):
+        c.executemany(f"DELETE FROM {table} WHERE run_id=?", [(i,) for i in ids])
+      for table in tables:
+        mine = {r["name"] for r in c.execute(f"PRAGMA main.table_info({table})")}
+        cols = ", ".join(r["name"] for r in c.execute(f"PRAGMA src.table_info({table})") if r["name"] in mine)
+        c.execute(f"INSERT INTO main.{table} ({cols}) SELECT {cols} FROM src.{table}")
+      if out_dir is not None:
+        c.executemany("UPDATE experiments SET out_dir=? WHERE run_id=?", [(os.path.abspath(out_dir), i) for i in ids])
+    return ids
+
   # --- reading ----------------------------------------------------------------------------
   def runs(self) -> list[dict[str, Any]]:
     """All experiments; a 'running' row whose process is gone on this host reads 'crashed'."""

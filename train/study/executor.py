@@ -1,5 +1,6 @@
 """Running a study on a Dask cluster: every unfinished cell is submitted as one task
-(`train.study.worker.run_cell`); results come back as tars into STUDY/runs/; failed attempts are
+(`train.study.worker.run_cell`); results come back as tars into STUDY/runs/, and each run's
+records into STUDY/study.sqlite; failed attempts are
 retried from the last run folder that came back, up to the study's `retries`; the state of every
 cell and its attempts lives in STUDY/state.json, so a study started again skips finished cells."""
 
@@ -12,8 +13,11 @@ import shutil
 import sys
 import time
 
+from train.db import ExperimentDB
 from train.study.spec import Cell, StudySpec, cells
-from train.study.worker import EVALUATE, TRAIN, pack, run_cell, unpack
+from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
+
+STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
 
 
 def cell_folder(study_folder: str, cell: Cell) -> str:
@@ -101,6 +105,8 @@ class StudyRunner:
       local = cell_folder(self.folder, self.cells[cid])
       shutil.rmtree(local, ignore_errors=True)
       unpack(res["tar"], local)
+      if os.path.exists(os.path.join(local, RUN_DB)):
+        ExperimentDB(os.path.join(self.folder, STUDY_DB)).import_runs(os.path.join(local, RUN_DB), local)
     attempt.update(ended=time.time(), rc=res["rc"], phase=res["phase"], worker=res["worker"],
                    error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
     failures = sum(1 for a in record["attempts"] if a["rc"] != 0 and not a.get("stopped"))
