@@ -1,7 +1,7 @@
 """A stand-in for `train.run` / `train.evaluate` in study tests (no JAX): `train ARGS` makes a run
 folder with a checkpoint every 100 steps (0.1 s each), `evaluate RUN` writes eval-hardest.json.
 FAKE_CRASH_SEED: that seed's first session exits 1 after its first checkpoint; FAKE_SLOW_SEED:
-that seed sleeps 0.5 s per checkpoint (time to kill its worker)."""
+that seed sleeps 1 s per checkpoint (time to kill its worker)."""
 
 import argparse
 import json
@@ -28,7 +28,7 @@ def train(argv: list[str]) -> int:
   step = max(done, default=0)
   json.dump(meta, open(meta_path, "w"))
   while step < meta["steps"]:
-    time.sleep(0.5 if str(meta["seed"]) == os.environ.get("FAKE_SLOW_SEED") else 0.1)
+    time.sleep(1.0 if str(meta["seed"]) == os.environ.get("FAKE_SLOW_SEED") else 0.1)
     step += 100
     os.makedirs(os.path.join(out, "checkpoints", str(step)))
     if str(meta["seed"]) == os.environ.get("FAKE_CRASH_SEED") and meta["sessions"] == 1:

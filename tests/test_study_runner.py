@@ -16,6 +16,7 @@ from distributed import Client, Nanny
 from train.study.cluster import local_cluster
 from train.study.executor import StudyRunner, cell_folder
 from train.study.spec import cells, study_from_dict
+from train.study.status import summary
 
 FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
 COMMANDS = ((sys.executable, FAKE, "train"), (sys.executable, FAKE, "evaluate"))
@@ -66,6 +67,11 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
         assert [a["rc"] for a in tries] == [1, 0] and tries[1]["resumed"]
         assert json.load(open(os.path.join(run, "run.json")))["sessions"] == 2
     assert {a["worker"] for c in state.values() for a in c["attempts"] if a.get("worker")} == {"a", "b"}
+    lines = summary(folder, runs=True)
+    attempts, retried = sum(len(c["attempts"]) for c in state.values()), sum(len(c["attempts"]) > 1 for c in state.values())
+    assert lines[0] == f"study study: 4 runs: 4 done, 0 failed, 0 not finished; {attempts} attempts, {retried} runs retried"
+    assert attempts >= 7 and retried >= 3  # the killed run and the two crashed ones
+    assert any(line.startswith(SLOW) and " done " in line and line.endswith("1.00") for line in lines[2:])
     again = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",)).run()
     assert again["done"] == 4 and json.load(open(os.path.join(folder, "state.json")))["cells"] == state
 

@@ -1,7 +1,7 @@
 """`python -m train.study STUDY [--set KEY=VALUE] [--plan]`: run a study (a YAML path, or the NAME
 of one in configs/studies/) on a Dask cluster: by default one started here (a worker per GPU, CPU
 slots), or an existing one (--scheduler). Finished runs of an earlier start are skipped; --plan
-lists the runs and stops."""
+lists the runs and stops. `python -m train.study status NAME [--runs]`: where it stands."""
 
 from __future__ import annotations
 
@@ -47,6 +47,10 @@ def _client(args):
 
 
 def main(argv=None) -> int:
+  argv = sys.argv[1:] if argv is None else argv
+  if argv[:1] == ["status"]:
+    from train.study.status import main as status_main  # noqa: PLC0415
+    return status_main(argv[1:])
   args = parser().parse_args(argv)
   try:
     spec = load_study(args.study, tuple(args.set))

@@ -20,8 +20,13 @@ from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
 STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
 
 
+def cell_folder_of(study_folder: str, cell_id: str) -> str:
+  """Where a run's folder comes back to: STUDY/runs/<id with / as _>."""
+  return os.path.join(study_folder, "runs", cell_id.replace("/", "_"))
+
+
 def cell_folder(study_folder: str, cell: Cell) -> str:
-  return os.path.join(study_folder, "runs", cell.id.replace("/", "_"))
+  return cell_folder_of(study_folder, cell.id)
 
 
 @dataclasses.dataclass

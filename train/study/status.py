@@ -1,0 +1,52 @@
+"""`python -m train.study status NAME [--root studies] [--runs]`: where a study stands, from its
+folder alone (state.json, the run folders): runs done / failed / not finished, attempts, and per
+run (--runs) its status, attempts, last worker and hardest-staircase success."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+from train.study.executor import cell_folder_of
+
+
+def _success(run_folder: str) -> str:
+  path = os.path.join(run_folder, "eval-hardest.json")
+  if not os.path.exists(path):
+    return "-"
+  return f"{json.load(open(path))['metrics']['success']['mean']:.2f}"
+
+
+def summary(folder: str, runs: bool = False) -> list[str]:
+  """The lines `status` prints; FileNotFoundError if the folder holds no study."""
+  state = json.load(open(os.path.join(folder, "state.json")))["cells"]
+  n = {k: sum(1 for c in state.values() if c["status"] == k) for k in ("done", "failed")}
+  attempts = sum(len(c["attempts"]) for c in state.values())
+  retried = sum(1 for c in state.values() if len(c["attempts"]) > 1)
+  lines = [f"study {os.path.basename(folder)}: {len(state)} runs: {n['done']} done, {n['failed']} failed, "
+           f"{len(state) - n['done'] - n['failed']} not finished; {attempts} attempts, {retried} runs retried"]
+  if runs:
+    lines.append(f"{'run':<44} {'status':<8} {'attempts':>8}  {'last worker':<12} success (hardest)")
+    for cid, c in state.items():
+      last = c["attempts"][-1] if c["attempts"] else {}
+      lines.append(f"{cid:<44} {c['status']:<8} {len(c['attempts']):>8}  {str(last.get('worker') or '-'):<12} "
+                   f"{_success(cell_folder_of(folder, cid))}")
+  return lines
+
+
+def main(argv: list[str]) -> int:
+  p = argparse.ArgumentParser(prog="python -m train.study status", description=__doc__.splitlines()[0])
+  p.add_argument("name", help="the study's name (its folder under --root)")
+  p.add_argument("--root", default="studies")
+  p.add_argument("--runs", action="store_true", help="one line per run")
+  args = p.parse_args(argv)
+  folder = os.path.join(args.root, args.name)
+  try:
+    print("\n".join(summary(folder, args.runs)))
+  except FileNotFoundError:
+    print(f"error: no study in {folder} (no state.json); start it with python -m train.study {args.name}",
+          file=sys.stderr)
+    return 2
+  return 0
