@@ -7,7 +7,6 @@ import json
 import os
 import pathlib
 import signal
-import sys
 import threading
 import time
 
@@ -19,7 +18,7 @@ from train.study.spec import cells, study_from_dict
 from train.study.status import summary
 
 FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
-COMMANDS = ((sys.executable, FAKE, "train"), (sys.executable, FAKE, "evaluate"))
+COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))  # after the worker's Python
 STUDY = {"name": "t", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], "retries": 1, "eval_trials": 3,
          "groups": [{"name": "g", "algo": "ppo", "preset": "cpu", "steps": [400], "backend": "cpu"}]}
 SLOW = "g/asc-inc-cog/400/s0"  # seed 0 runs slowly; its worker is killed during its first attempt

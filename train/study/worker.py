@@ -12,8 +12,9 @@ import sys
 import tarfile
 import tempfile
 
-TRAIN = (sys.executable, "-m", "train.run")
-EVALUATE = (sys.executable, "-m", "train.evaluate")
+# what a worker runs, after its own Python (sys.executable there: workers may be other machines)
+TRAIN = ("-m", "train.run")
+EVALUATE = ("-m", "train.evaluate")
 RUN_DB = "run.sqlite"  # each run's records travel inside its folder
 
 
@@ -47,9 +48,9 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
     phase, rc = "train", 0
     if train:
       given = ["--resume", out] if resume is not None else [*run_args, "--out", out]
-      rc = _call([*commands[0], *given, "--db", db], log)
+      rc = _call([sys.executable, *commands[0], *given, "--db", db], log)
     if rc == 0:
-      phase, rc = "evaluate", _call([*commands[1], out, *eval_args, "--db", db], log)
+      phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log)
     tail = open(log).read()[-2000:] if os.path.exists(log) else ""
     if not os.path.isdir(out):
       return {"rc": rc, "phase": phase, "tar": None, "log_tail": tail, "worker": _worker_name()}
