@@ -11,6 +11,7 @@ import shlex
 import sys
 
 from mjx_tracks.envs.config import ConfigError
+from train.study.executor import STUDY_DB, cell_folder_of
 from train.study.spec import cells, load_study
 
 
@@ -65,13 +66,13 @@ def main(argv=None) -> int:
   print(f"study {spec.name}: {len(runs)} runs = {len(spec.tasks)} tasks x {len(spec.seeds)} seeds x budgets "
         f"per group ({budgets}); retries per run: {spec.retries} -> {folder}")
   for c in runs:
-    args_ = c.run_args(os.path.join(folder, "runs", c.id.replace("/", "_")), os.path.join(folder, "study.sqlite"))
+    args_ = c.run_args(cell_folder_of(folder, c.id), os.path.join(folder, STUDY_DB))
     print(f"{c.id}: python -m train.run {shlex.join(args_)}")
   return 0
 
 
 def _run(spec, folder: str, args) -> int:
-  from train.study.executor import StudyRunner  # noqa: PLC0415
+  from train.study.executor import StudyRunner  # noqa: PLC0415  (distributed: only when running)
   try:
     client, kinds = _client(args)
   except (ValueError, OSError) as e:

@@ -1,8 +1,8 @@
 """Running a study on a Dask cluster: every unfinished cell is submitted as one task
-(`train.study.worker.run_cell`); results come back as tars into STUDY/runs/, and each run's
-records into STUDY/study.sqlite; failed attempts are
-retried from the last run folder that came back, up to the study's `retries`; the state of every
-cell and its attempts lives in STUDY/state.json, so a study started again skips finished cells."""
+(`train.study.worker.run_cell`); run folders come back as tars into STUDY/runs/ and their records
+into STUDY/study.sqlite; failed attempts are retried from the last run folder that came back, up
+to the study's `retries`; every cell's state and attempts live in STUDY/state.json, so a study
+started again skips finished cells."""
 
 from __future__ import annotations
 
