@@ -62,7 +62,7 @@ PRESETS: dict[str, dict[str, object]] = {
     },
     "sac": {
         "cpu": SACPreset(num_envs=8, num_timesteps=1_024, batch_size=32, grad_updates_per_step=1, actor_steps_per_update=4,
-                         min_replay_size=64, max_replay_size=10_000, hidden=(32, 32), num_evals=2,
+                         min_replay_size=64, max_replay_size=10_000, hidden=(32, 32), num_evals=1,
                          training_metrics_steps=128, probe_steps=0,
                          num_eval_envs=8, config_overrides=()),
         "gpu": SACPreset(),
