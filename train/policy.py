@@ -48,7 +48,7 @@ def act_from_params(spec: NetworkSpec, deterministic: bool = True):
   """make_act(params) -> act(observation): the parameters stay arguments of whatever jits it, so
   one compilation serves every checkpoint of a run."""
   inference = spec.make_inference_fn()
-  key = jax.random.PRNGKey(0)  # unused by the deterministic policy
+  key = jax.random.PRNGKey(0)  # ignored by the deterministic policy; a stochastic one samples with it every call
   return lambda params: (lambda obs: inference(params, deterministic=deterministic)(obs, key)[0])
 
 

@@ -33,7 +33,8 @@ class ConfigError(ValueError):
   """A configuration key, type or value is wrong; the message names it."""
 
 
-def _check(cond: bool, key: str, msg: str) -> None:
+def require(cond: bool, key: str, msg: str) -> None:
+  """Raises ConfigError("KEY: MSG") unless cond."""
   if not cond:
     raise ConfigError(f"{key}: {msg}")
 
@@ -47,9 +48,9 @@ class ControlConfig:
 
   def validate(self, key: str) -> None:
     from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
-    _check(self.mode in CONTROL_MODES, f"{key}.mode", f"must be one of {sorted(CONTROL_MODES)}, got {self.mode!r}")
-    _check(self.v_range[0] < self.v_range[1], f"{key}.v_range", "needs min < max")
-    _check(0.01 <= self.period <= 2.0, f"{key}.period", f"must be in [0.01, 2] s, got {self.period}")
+    require(self.mode in CONTROL_MODES, f"{key}.mode", f"must be one of {sorted(CONTROL_MODES)}, got {self.mode!r}")
+    require(self.v_range[0] < self.v_range[1], f"{key}.v_range", "needs min < max")
+    require(0.01 <= self.period <= 2.0, f"{key}.period", f"must be in [0.01, 2] s, got {self.period}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,14 +66,14 @@ class ObservationConfig:
   def validate(self, key: str) -> None:
     from mjx_tracks.envs.observations import PARTS  # noqa: PLC0415
     for p in self.parts:
-      _check(p in PARTS, f"{key}.parts", f"unknown part {p!r}; known: {sorted(PARTS)}")
-    _check(len(set(self.parts)) == len(self.parts), f"{key}.parts", "has duplicates")
-    _check(1 <= self.vertical_beams <= 480, f"{key}.vertical_beams", "must be in [1, 480]")
-    _check(1 <= self.horizontal_beams <= 640, f"{key}.horizontal_beams", "must be in [1, 640]")
-    _check(1 <= self.band_px <= 480, f"{key}.band_px", "must be in [1, 480]")
-    _check(min(self.rays_per_band) >= 1, f"{key}.rays_per_band", "must be >= 1")
-    _check(0 <= self.depth_range[0] < self.depth_range[1], f"{key}.depth_range", "needs 0 <= min < max")
-    _check(0.0 <= self.noise < 1.0, f"{key}.noise", "must be in [0, 1)")
+      require(p in PARTS, f"{key}.parts", f"unknown part {p!r}; known: {sorted(PARTS)}")
+    require(len(set(self.parts)) == len(self.parts), f"{key}.parts", "has duplicates")
+    require(1 <= self.vertical_beams <= 480, f"{key}.vertical_beams", "must be in [1, 480]")
+    require(1 <= self.horizontal_beams <= 640, f"{key}.horizontal_beams", "must be in [1, 640]")
+    require(1 <= self.band_px <= 480, f"{key}.band_px", "must be in [1, 480]")
+    require(min(self.rays_per_band) >= 1, f"{key}.rays_per_band", "must be >= 1")
+    require(0 <= self.depth_range[0] < self.depth_range[1], f"{key}.depth_range", "needs 0 <= min < max")
+    require(0.0 <= self.noise < 1.0, f"{key}.noise", "must be in [0, 1)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,8 +83,8 @@ class CurriculumConfig:
 
   def validate(self, key: str) -> None:
     from scenes.curriculum import RULES  # noqa: PLC0415
-    _check(self.rule in RULES, f"{key}.rule", f"must be one of {RULES}, got {self.rule!r}")
-    _check(self.window >= 1, f"{key}.window", "must be >= 1")
+    require(self.rule in RULES, f"{key}.rule", f"must be one of {RULES}, got {self.rule!r}")
+    require(self.window >= 1, f"{key}.window", "must be >= 1")
 
 
 _RENAMED_VARIANTS = {"paper": "paper_literal", "original": "original_code"}
@@ -106,14 +107,14 @@ class SceneConfig:
   def validate(self, key: str) -> None:
     from scenes.samplers import SAMPLERS, VARIANTS  # noqa: PLC0415
     from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
-    _check(self.kind in ("stairs", "nav"), f"{key}.kind", "must be 'stairs' or 'nav'")
-    _check(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
-    _check(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
+    require(self.kind in ("stairs", "nav"), f"{key}.kind", "must be 'stairs' or 'nav'")
+    require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
+    require(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
     hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
-    _check(self.variant in VARIANTS, f"{key}.variant", f"must be one of {VARIANTS}, got {self.variant!r}{hint}")
+    require(self.variant in VARIANTS, f"{key}.variant", f"must be one of {VARIANTS}, got {self.variant!r}{hint}")
     for name, (lo, hi) in zip(STAIR_PARAMS, STAIR_LIMITS):
       r = getattr(self, name)
-      _check(lo <= r[0] <= r[1] <= hi, f"{key}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(r)}")
+      require(lo <= r[0] <= r[1] <= hi, f"{key}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(r)}")
     self.curriculum.validate(f"{key}.curriculum")
 
 
@@ -129,11 +130,11 @@ class RewardConfig:
   safety_window: int  # samples averaged by the penalty
 
   def validate(self, key: str) -> None:
-    _check(self.kind in ("free", "cog", "angular"), f"{key}.kind", "must be 'free', 'cog' or 'angular'")
+    require(self.kind in ("free", "cog", "angular"), f"{key}.kind", "must be 'free', 'cog' or 'angular'")
     for name in ("progress_scale", "cog_scale", "angular_scale", "tipover_penalty"):
-      _check(getattr(self, name) >= 0, f"{key}.{name}", "must be >= 0")
-    _check(self.normalize_episodes >= 1, f"{key}.normalize_episodes", "must be >= 1")
-    _check(self.safety_window >= 1, f"{key}.safety_window", "must be >= 1")
+      require(getattr(self, name) >= 0, f"{key}.{name}", "must be >= 0")
+    require(self.normalize_episodes >= 1, f"{key}.normalize_episodes", "must be >= 1")
+    require(self.safety_window >= 1, f"{key}.safety_window", "must be >= 1")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -143,9 +144,9 @@ class EpisodeConfig:
   away_factor: float  # terminate when dist > away_factor * d0
 
   def validate(self, key: str) -> None:
-    _check(1 <= self.max_steps <= 100_000, f"{key}.max_steps", "must be in [1, 100000]")
-    _check(self.goal_tolerance >= 0, f"{key}.goal_tolerance", "must be >= 0")
-    _check(self.away_factor > 1.0, f"{key}.away_factor", "must be > 1")
+    require(1 <= self.max_steps <= 100_000, f"{key}.max_steps", "must be in [1, 100000]")
+    require(self.goal_tolerance >= 0, f"{key}.goal_tolerance", "must be >= 0")
+    require(self.away_factor > 1.0, f"{key}.away_factor", "must be > 1")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -163,7 +164,7 @@ class TaskConfig:
 
   def validate(self, key: str = "") -> None:
     from mjx_tracks.robots import ROBOTS  # noqa: PLC0415
-    _check(str(self.robot) in ROBOTS, "robot", f"must be one of {sorted(ROBOTS)}, got {self.robot!r}")
+    require(str(self.robot) in ROBOTS, "robot", f"must be one of {sorted(ROBOTS)}, got {self.robot!r}")
     for f in dataclasses.fields(self):
       v = getattr(self, f.name)
       if dataclasses.is_dataclass(v):
@@ -175,10 +176,10 @@ class TaskConfig:
           raise ConfigError(str(e)) from e
     if self.scene.kind == "nav":
       from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
-      _check("w" in CONTROL_MODES[self.control.mode], "control.mode",
+      require("w" in CONTROL_MODES[self.control.mode], "control.mode",
              "navigation needs a mode with angular velocity w")
     steps = self.control.period / self.physics.timestep
-    _check(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
+    require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
 
   def to_dict(self) -> dict:
     return _to_plain(dataclasses.asdict(self))
@@ -196,26 +197,26 @@ def _convert(value: Any, tp: Any, key: str) -> Any:
   """Checks value against the annotation tp and converts lists to tuples."""
   origin = typing.get_origin(tp)
   if dataclasses.is_dataclass(tp):
-    _check(isinstance(value, dict), key, f"must be a mapping, got {type(value).__name__}")
+    require(isinstance(value, dict), key, f"must be a mapping, got {type(value).__name__}")
     return _build(tp, value, key)
   if origin is tuple:
     args = typing.get_args(tp)
-    _check(isinstance(value, (list, tuple)), key, f"must be a list, got {value!r}")
+    require(isinstance(value, (list, tuple)), key, f"must be a list, got {value!r}")
     if len(args) == 2 and args[1] is Ellipsis:
       return tuple(_convert(v, args[0], f"{key}[{i}]") for i, v in enumerate(value))
-    _check(len(value) == len(args), key, f"must have {len(args)} entries, got {len(value)}")
+    require(len(value) == len(args), key, f"must have {len(args)} entries, got {len(value)}")
     return tuple(_convert(v, a, f"{key}[{i}]") for i, (v, a) in enumerate(zip(value, args)))
   if tp is float:
-    _check(isinstance(value, (int, float)) and not isinstance(value, bool), key, f"must be a number, got {value!r}")
+    require(isinstance(value, (int, float)) and not isinstance(value, bool), key, f"must be a number, got {value!r}")
     return float(value)
   if tp is int:
-    _check(isinstance(value, int) and not isinstance(value, bool), key, f"must be an integer, got {value!r}")
+    require(isinstance(value, int) and not isinstance(value, bool), key, f"must be an integer, got {value!r}")
     return value
   if tp is bool:
-    _check(isinstance(value, bool), key, f"must be true or false, got {value!r}")
+    require(isinstance(value, bool), key, f"must be true or false, got {value!r}")
     return value
   if tp is str:
-    _check(isinstance(value, (str, int)) and not isinstance(value, bool), key, f"must be a string, got {value!r}")
+    require(isinstance(value, (str, int)) and not isinstance(value, bool), key, f"must be a string, got {value!r}")
     return str(value)
   raise ConfigError(f"{key}: unsupported type {tp}")
 
@@ -224,9 +225,9 @@ def _build(cls, raw: dict, key: str):
   hints = typing.get_type_hints(cls)
   names = [f.name for f in dataclasses.fields(cls)]
   for k in raw:
-    _check(k in names, f"{key}.{k}".lstrip("."), f"unknown key; known: {sorted(names)}")
+    require(k in names, f"{key}.{k}".lstrip("."), f"unknown key; known: {sorted(names)}")
   missing = [n for n in names if n not in raw]
-  _check(not missing, key or "config", f"missing keys {missing}")
+  require(not missing, key or "config", f"missing keys {missing}")
   return cls(**{k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()})
 
 

@@ -10,7 +10,8 @@ import re
 
 import yaml
 
-from mjx_tracks.envs.config import ConfigError, apply_override, available_tasks, config_dir, load_config, parse_mapping
+from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config,
+                                    parse_mapping, require)
 from train.early_stop import parse_early_stop
 from train.presets import get_preset
 
@@ -71,29 +72,24 @@ class Cell:
     return [*self.train_args(), "--out", out, "--db", db]
 
 
-def _check(cond: bool, key: str, msg: str) -> None:
-  if not cond:
-    raise ConfigError(f"{key}: {msg}")
-
-
 def _group(raw, i: int) -> GroupSpec:
   key = f"groups[{i}]"
-  _check(isinstance(raw, dict), key, f"must be a mapping, got {raw!r}")
+  require(isinstance(raw, dict), key, f"must be a mapping, got {raw!r}")
   g = parse_mapping(GroupSpec, {**GROUP_DEFAULTS, **raw}, key)
-  _check(bool(NAME.match(g.name)), f"{key}.name", f"{g.name!r} is not a plain name (letters, digits, _ . -)")
+  require(bool(NAME.match(g.name)), f"{key}.name", f"{g.name!r} is not a plain name (letters, digits, _ . -)")
   try:
     get_preset(g.algo, g.preset)
   except ValueError as e:
     raise ConfigError(f"{key}: {e}") from None
-  _check(bool(g.steps) and all(n >= 1 for n in g.steps), f"{key}.steps", "one or more budgets >= 1")
-  _check(g.backend in BACKENDS, f"{key}.backend", f"one of {BACKENDS}, got {g.backend!r}")
+  require(bool(g.steps) and all(n >= 1 for n in g.steps), f"{key}.steps", "one or more budgets >= 1")
+  require(g.backend in BACKENDS, f"{key}.backend", f"one of {BACKENDS}, got {g.backend!r}")
   return g
 
 
 def _check_runs(spec: StudySpec) -> None:
   """Every task's config takes every group's overrides and early stop."""
   for task in spec.tasks:
-    _check(task in available_tasks(), "tasks", f"unknown task {task!r}; known: {available_tasks()}")
+    require(task in available_tasks(), "tasks", f"unknown task {task!r}; known: {available_tasks()}")
     for i, g in enumerate(spec.groups):
       try:
         cfg = load_config(task, tuple(get_preset(g.algo, g.preset).config_overrides) + g.set)
@@ -105,18 +101,18 @@ def _check_runs(spec: StudySpec) -> None:
 
 def study_from_dict(raw: dict) -> StudySpec:
   """A validated StudySpec from a plain mapping."""
-  _check(isinstance(raw, dict), "study", "the top level must be a mapping")
+  require(isinstance(raw, dict), "study", "the top level must be a mapping")
   raw = {**STUDY_DEFAULTS, **raw}
   groups = raw.get("groups")
-  _check(isinstance(groups, list) and bool(groups), "groups", "must be a non-empty list")
+  require(isinstance(groups, list) and bool(groups), "groups", "must be a non-empty list")
   spec = parse_mapping(StudySpec, {**raw, "groups": []}, "")
   spec = dataclasses.replace(spec, groups=tuple(_group(g, i) for i, g in enumerate(groups)))
-  _check(bool(NAME.match(spec.name)), "name", f"{spec.name!r} is not a plain name (letters, digits, _ . -)")
+  require(bool(NAME.match(spec.name)), "name", f"{spec.name!r} is not a plain name (letters, digits, _ . -)")
   names = [g.name for g in spec.groups]
-  _check(len(set(names)) == len(names), "groups", f"group names repeat: {names}")
-  _check(bool(spec.tasks) and bool(spec.seeds), "tasks / seeds", "each needs one or more entries")
-  _check(len(set(spec.seeds)) == len(spec.seeds) and min(spec.seeds) >= 0, "seeds", "distinct integers >= 0")
-  _check(spec.retries >= 0 and spec.eval_trials >= 1, "retries / eval_trials", "retries >= 0, eval_trials >= 1")
+  require(len(set(names)) == len(names), "groups", f"group names repeat: {names}")
+  require(bool(spec.tasks) and bool(spec.seeds), "tasks / seeds", "each needs one or more entries")
+  require(len(set(spec.seeds)) == len(spec.seeds) and min(spec.seeds) >= 0, "seeds", "distinct integers >= 0")
+  require(spec.retries >= 0 and spec.eval_trials >= 1, "retries / eval_trials", "retries >= 0, eval_trials >= 1")
   _check_runs(spec)
   return spec
 
