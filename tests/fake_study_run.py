@@ -1,7 +1,9 @@
 """A stand-in for `train.run` / `train.evaluate` in study tests (no JAX): `train ARGS` makes a run
-folder with a checkpoint every 100 steps (0.1 s each), `evaluate RUN` writes eval-hardest.json.
-FAKE_CRASH_SEED: that seed's first session exits 1 after its first checkpoint; FAKE_SLOW_SEED:
-that seed sleeps 1 s per checkpoint (time to kill its worker)."""
+folder with a checkpoint every 100 steps (0.1 s each) and records the run and one statistics row per
+checkpoint in its database; `evaluate RUN --suite --trials N [--milestones]` records N trials per
+scene of fake_scores() and writes eval-hardest.json. FAKE_CRASH_SEED: that seed's first session
+exits 1 after its first checkpoint; FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
+kill its worker)."""
 
 import argparse
 import json
@@ -9,10 +11,22 @@ import os
 import sys
 import time
 
+from train.db import ExperimentDB
+
+SCENES = ("hardest", "uniform", "held-out/middle")
+
+
+def fake_success(task: str, seed: int, budget: int, trial: int) -> int:
+  """Trial outcomes: 'inc' tasks succeed in (seed + 2) of every 4 trials, others in seed + 1; the
+  last budget adds one more of every 4 (capped at 4)."""
+  per4 = (seed + 2 if "-inc-" in task else seed + 1) + (1 if budget >= 400 else 0)
+  return int(trial % 4 < min(per4, 4))
+
 
 def train(argv: list[str]) -> int:
   p = argparse.ArgumentParser()
-  for name in ("--task", "--algo", "--preset", "--steps", "--seed", "--out", "--db", "--resume", "--early-stop"):
+  for name in ("--task", "--algo", "--preset", "--steps", "--seed", "--out", "--db", "--resume", "--early-stop",
+               "--milestones"):
     p.add_argument(name)
   p.add_argument("--set", action="append", default=[])
   a = p.parse_args(argv)
@@ -21,23 +35,39 @@ def train(argv: list[str]) -> int:
   if a.resume:
     meta = json.load(open(meta_path))
   else:
-    meta = {"task": a.task, "seed": int(a.seed), "steps": int(a.steps), "sessions": 0}
+    meta = {"run_id": f"{a.task}-s{a.seed}-{time.time_ns()}", "task": a.task, "seed": int(a.seed),
+            "steps": int(a.steps), "sessions": 0, "milestones": [int(m) for m in (a.milestones or "").split(",") if m]}
   meta["sessions"] += 1
+  db = ExperimentDB(a.db)
+  db.start(meta["run_id"], meta["task"], "ppo", "cpu", meta["seed"], {}, out, meta["steps"])
   os.makedirs(os.path.join(out, "checkpoints"), exist_ok=True)
-  done = [int(d) for d in os.listdir(os.path.join(out, "checkpoints"))]
-  step = max(done, default=0)
+  step = max([int(d) for d in os.listdir(os.path.join(out, "checkpoints"))], default=0)
   json.dump(meta, open(meta_path, "w"))
   while step < meta["steps"]:
     time.sleep(1.0 if str(meta["seed"]) == os.environ.get("FAKE_SLOW_SEED") else 0.1)
     step += 100
     os.makedirs(os.path.join(out, "checkpoints", str(step)))
+    if step in meta["milestones"]:
+      os.makedirs(os.path.join(out, "milestones", str(step)))
+    db.log_stats(meta["run_id"], {"step": step, "wall_s": step / 100, "return_mean": step / 1000 + meta["seed"],
+                                  "success_rate": step / 1000, "source": "train"}, {})
     if str(meta["seed"]) == os.environ.get("FAKE_CRASH_SEED") and meta["sessions"] == 1:
       return 1
+  db.finish(meta["run_id"], "done", {}, step)
   return 0
 
 
 def evaluate(argv: list[str]) -> int:
-  out = argv[0]
+  out, trials = argv[0], int(argv[argv.index("--trials") + 1])
+  meta = json.load(open(os.path.join(out, "run.json")))
+  db = ExperimentDB(argv[argv.index("--db") + 1])
+  budgets = [*meta["milestones"], None] if "--milestones" in argv else [None]
+  for budget in budgets:
+    for scene in SCENES:
+      rows = [{"scene": scene, "budget": budget, "trial": i, "progress": 0.5, "cog_deviation": 0.1,
+               "pitch_rate": 0.2, "tipped_over": 0, "length": 10,
+               "success": fake_success(meta["task"], meta["seed"], budget or meta["steps"], i)} for i in range(trials)]
+      db.log_evals(meta["run_id"], rows, replace=(scene, budget))
   json.dump({"metrics": {"success": {"mean": 1.0}}}, open(os.path.join(out, "eval-hardest.json"), "w"))
   return 0
 

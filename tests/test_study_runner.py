@@ -10,17 +10,24 @@ import signal
 import threading
 import time
 
+import scipy.stats
 from distributed import Client, Nanny
+from fake_study_run import fake_success
+
+from train.db import ExperimentDB
 
 from train.study.cluster import local_cluster
-from train.study.executor import StudyRunner, cell_folder
+from train.study.executor import STUDY_DB, StudyRunner, cell_folder
 from train.study.spec import cells, study_from_dict
+from train.study.report import write_report
 from train.study.status import summary
 
 FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
 COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))  # after the worker's Python
-STUDY = {"name": "t", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], "retries": 1, "eval_trials": 3,
-         "groups": [{"name": "g", "algo": "ppo", "preset": "cpu", "steps": [400], "backend": "cpu"}]}
+STUDY = {"name": "t", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], "retries": 1, "eval_trials": 4,
+         "groups": [{"name": "g", "algo": "ppo", "preset": "cpu", "steps": [200, 400], "budgets": "milestones",
+                     "backend": "cpu"}],
+         "compare": [["asc-inc-cog", "asc-uni-cog"]]}
 SLOW = "g/asc-inc-cog/400/s0"  # seed 0 runs slowly; its worker is killed during its first attempt
 
 
@@ -71,8 +78,37 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
     assert lines[0] == f"study study: 4 runs: 4 done, 0 failed, 0 not finished; {attempts} attempts, {retried} runs retried"
     assert attempts >= 7 and retried >= 3  # the killed run and the two crashed ones
     assert any(line.startswith(SLOW) and " done " in line and line.endswith("1.00") for line in lines[2:])
+    db_attempts = ExperimentDB(os.path.join(folder, STUDY_DB)).attempts(spec.name)
+    assert [(a["cell"], a["rc"]) for a in db_attempts] == [(cid, a["rc"]) for cid in sorted(state) for a in state[cid]["attempts"]]
+    assert all(a["run_id"] for a in db_attempts if a["rc"] is not None)  # every attempt that ran names its run
     again = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",)).run()
     assert again["done"] == 4 and json.load(open(os.path.join(folder, "state.json")))["cells"] == state
+  _check_report(folder)
+
+
+def _per_run_success(task: str, budget: int) -> list[float]:
+  """Each seed's success rate as the stand-in records it (plain Python: the report's oracle)."""
+  return [sum(fake_success(task, seed, budget, i) for i in range(4)) / 4 for seed in (0, 1)]
+
+
+def _check_report(folder: str) -> None:
+  """report.md holds rliable's IQM and probability of improvement of the recorded trials (checked
+  against scipy's trimmed mean and the pairwise count) and links figures that exist."""
+  path = write_report(folder, "python -m train.study report t")
+  text = open(path).read()
+  for task in ("asc-inc-cog", "asc-uni-cog"):
+    for budget in (200, 400):
+      iqm = scipy.stats.trim_mean(_per_run_success(task, budget), 0.25)
+      row = [line for line in text.splitlines() if line.startswith(f"| g | {task} | {budget:,} | 2 |")]
+      assert len(row) == 1 and row[0].split(" | ")[4].startswith(f"{iqm:.2f} ["), row
+  for budget in (200, 400):
+    a, b = _per_run_success("asc-inc-cog", budget), _per_run_success("asc-uni-cog", budget)
+    p = sum((x > y) + 0.5 * (x == y) for x in a for y in b) / (len(a) * len(b))
+    row = [line for line in text.splitlines() if line.startswith(f"| g | {budget:,} | asc-inc-cog | asc-uni-cog |")]
+    assert len(row) == 1 and row[0].split(" | ")[4].startswith(f"{p:.2f} ["), row
+  figures = [line[line.index("(") + 1:-1] for line in text.splitlines() if line.startswith("![")]
+  assert sorted(figures) == ["curves-g-step.png", "curves-g-wall_s.png", "final-g.png"]
+  assert all(os.path.getsize(os.path.join(folder, f)) > 10_000 for f in figures)
 
 
 def test_the_default_cluster_pins_one_worker_per_gpu_and_counts_slots_as_resources():

@@ -44,6 +44,9 @@ def test_a_run_plans_like_its_command_line(tmp_path):
     ({"groups": [GROUP, GROUP]}, "group names repeat"),
     ({"groups": [{**GROUP, "set": ["reward.cog_scal=1"]}]}, r"groups\[0\] \(ppo\) on asc-inc-cog: reward.cog_scal: unknown key"),
     ({"tasks": ["nav"], "groups": [{**GROUP, "early_stop": "success"}]}, "nav has no hardest staircase"),
+    ({"groups": [{**GROUP, "budgets": "some"}]}, r"groups\[0\].budgets: one of"),
+    ({"groups": [{**GROUP, "budgets": "milestones", "early_stop": "return"}]}, "an early stop would cut them short"),
+    ({"compare": [["asc-inc-cog", "nav"]]}, r"compare\[0\]: two different tasks of the study"),
 ])
 def test_bad_studies_fail_naming_the_fault(change, words):
   with pytest.raises(ConfigError, match=words):
@@ -51,7 +54,11 @@ def test_bad_studies_fail_naming_the_fault(change, words):
 
 
 def test_the_shipped_studies_validate_and_the_command_lists_their_runs(capsys):
-  assert len(cells(load_study("paper"))) == 4 * 5 * (1 + 4)  # a shipped study by name
+  paper = cells(load_study("paper"))  # a shipped study by name
+  assert len(paper) == 4 * 5 * 2  # PPO's 4 budgets: milestones of one run per task and seed
+  ppo = [c for c in paper if c.group == "ppo"]
+  assert {c.budgets() for c in ppo} == {(250_000, 500_000, 1_000_000, 2_000_000)}
+  assert all(c.train_args()[-2:] == ["--milestones", "250000,500000,1000000"] for c in ppo)
   assert study_main([str(STUDIES / "tiny.yaml"), "--plan", "--set", "seeds=[7]"]) == 0
   lines = capsys.readouterr().out.splitlines()
   assert len(lines) == 1 + 2 and all("--seed 7 " in line for line in lines[1:])

@@ -148,9 +148,10 @@ def policy_params(raw: dict, spec: NetworkSpec):
   return serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
 
 
-def export_policy(out_dir: str, normalizer, policy, spec: NetworkSpec, info: dict[str, Any]) -> str:
-  """Writes RUN/policy/ (parameters, then policy.json, each replaced whole); returns the directory."""
-  path = os.path.join(os.path.abspath(out_dir), "policy")
+def export_policy(out_dir: str, normalizer, policy, spec: NetworkSpec, info: dict[str, Any],
+                  folder: str = "policy") -> str:
+  """Writes RUN/<folder>/ (parameters, then policy.json, each replaced whole); returns the directory."""
+  path = os.path.join(os.path.abspath(out_dir), folder)
   ckpt = ocp.StandardCheckpointer(multiprocessing_options=_solo())
   ckpt.save(os.path.join(path, "params"), _plain((normalizer, policy)), force=True)
   ckpt.wait_until_finished()

@@ -45,7 +45,12 @@ CREATE TABLE IF NOT EXISTS events (
 CREATE TABLE IF NOT EXISTS evals (
   run_id TEXT NOT NULL REFERENCES experiments(run_id), scene TEXT NOT NULL, trial INTEGER NOT NULL,
   progress REAL, success INTEGER, cog_deviation REAL, pitch_rate REAL, tipped_over INTEGER,
-  length INTEGER, created TEXT
+  length INTEGER, created TEXT, budget INTEGER
+);
+CREATE TABLE IF NOT EXISTS attempts (
+  study TEXT NOT NULL, cell TEXT NOT NULL, attempt INTEGER NOT NULL, run_id TEXT, worker TEXT,
+  started REAL, ended REAL, rc INTEGER, phase TEXT, resumed INTEGER, error TEXT,
+  PRIMARY KEY (study, cell, attempt)
 );
 """
 STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", "progress_mean",
@@ -55,8 +60,10 @@ EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed
 # a run's final status -> the event that records it
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
                 "failed": "failed", "crashed": "crashed"}
-EVAL_COLUMNS = ("scene", "trial", "progress", "success", "cog_deviation", "pitch_rate",
-                "tipped_over", "length")
+EVAL_COLUMNS = ("scene", "budget", "trial", "progress", "success", "cog_deviation", "pitch_rate",
+                "tipped_over", "length")  # budget: the milestone of the policy (train.run --milestones); NULL: final
+# columns added since databases were first written: table -> (column, type)
+ADDED_COLUMNS = {"stats": (("source", "TEXT"),), "evals": (("budget", "INTEGER"),)}
 
 
 def _now() -> str:
@@ -83,8 +90,11 @@ class ExperimentDB:
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with self._conn() as c:
       c.executescript(SCHEMA)
-      if "source" not in {r["name"] for r in c.execute("PRAGMA table_info(stats)")}:  # a database from before
-        c.execute("ALTER TABLE stats ADD COLUMN source TEXT")
+      for table, columns in ADDED_COLUMNS.items():  # a database from before they existed
+        have = {r["name"] for r in c.execute(f"PRAGMA table_info({table})")}
+        for name, kind in columns:
+          if name not in have:
+            c.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
 
   @contextlib.contextmanager
   def _conn(self) -> Iterator[sqlite3.Connection]:
@@ -149,11 +159,25 @@ class ExperimentDB:
                 (status, _now(), json.dumps(final or {}), run_id))
       self._event(c, run_id, STATUS_EVENT[status], step, detail)
 
-  def log_evals(self, run_id: str, trials: list[dict[str, Any]]) -> None:
+  def log_evals(self, run_id: str, trials: list[dict[str, Any]], replace: tuple[str, int | None] | None = None) -> None:
+    """Adds one row per trial; replace=(scene, budget) first drops that scene's earlier rows."""
     with self._conn() as c:
+      if replace is not None:
+        c.execute("DELETE FROM evals WHERE run_id=? AND scene=? AND budget IS ?", (run_id, *replace))
       c.executemany(f"INSERT INTO evals (run_id, {', '.join(EVAL_COLUMNS)}, created) "
                     f"VALUES (?, {', '.join('?' * len(EVAL_COLUMNS))}, ?)",
                     [[run_id, *[t.get(k) for k in EVAL_COLUMNS], _now()] for t in trials])
+
+  def log_attempt(self, study: str, cell: str, attempt: int, record: dict[str, Any], run_id: str | None) -> None:
+    """A study's attempt at one of its runs (train.study): when, where, how it ended."""
+    with self._conn() as c:
+      c.execute("INSERT OR REPLACE INTO attempts VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (study, cell, attempt, run_id, record.get("worker"), record.get("started"), record.get("ended"),
+                 record.get("rc"), record.get("phase"), int(bool(record.get("resumed"))), record.get("error")))
+
+  def attempts(self, study: str) -> list[dict[str, Any]]:
+    with self._conn() as c:
+      return [dict(r) for r in c.execute("SELECT * FROM attempts WHERE study=? ORDER BY cell, attempt", (study,))]
 
   def import_runs(self, src: str, out_dir: str | None = None) -> list[str]:
     """Copies every run of another database file (e.g. one that came back from a study's worker)
@@ -201,7 +225,7 @@ class ExperimentDB:
 
   def evals(self, run_id: str) -> list[dict[str, Any]]:
     with self._conn() as c:
-      return [dict(r) for r in c.execute("SELECT * FROM evals WHERE run_id=? ORDER BY scene, trial", (run_id,))]
+      return [dict(r) for r in c.execute("SELECT * FROM evals WHERE run_id=? ORDER BY budget, scene, trial", (run_id,))]
 
 
 class NullDB:
@@ -246,10 +270,11 @@ def _show(db: ExperimentDB, run: dict) -> None:
   if stats:
     print("last statistics:", json.dumps({k: stats[-1][k] for k in STAT_COLUMNS}))
   evals = db.evals(run["run_id"])
-  for scene in sorted({e["scene"] for e in evals}):
-    trials = [e for e in evals if e["scene"] == scene]
+  for budget, scene in sorted({(e["budget"] or 0, e["scene"]) for e in evals}):
+    trials = [e for e in evals if e["scene"] == scene and (e["budget"] or 0) == budget]
     mean = lambda k: sum(t[k] for t in trials) / len(trials)
-    print(f"eval {scene}: {len(trials)} trials, progress {mean('progress'):.3f}, "
+    at = f" @ {budget:,} steps" if budget else ""
+    print(f"eval {scene}{at}: {len(trials)} trials, progress {mean('progress'):.3f}, "
           f"success {mean('success'):.2f}, tipped {mean('tipped_over'):.2f}")
 
 

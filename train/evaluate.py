@@ -1,11 +1,14 @@
 """`python -m train.evaluate RUN_DIR --trials 100 --scene hardest`: run a trained policy.
 
 Scenes: hardest (every staircase parameter at its hard end of the task's ranges: n = n_max,
-l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by default), uniform (the task's ranges, uniform), incremental
-(the task's sampler at --eps), train (the task's own sampler at --eps). Trials run in parallel,
-one episode each, deterministic policy: the exported RUN_DIR/policy, or with --checkpoint [STEP]
-a training checkpoint (a killed run has no export yet). Writes RUN_DIR/eval-<scene>.json (mean +- std of
-progress, success, COG deviation, |pitch rate|, tip-overs, episode length) and database rows.
+l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by default), uniform (the
+task's ranges, uniform), incremental (the task's sampler at --eps), train (the task's own sampler
+at --eps), held-out/NAME (a fixed staircase of the task's evaluation.held_out); --suite runs the
+evaluation suite (hardest, uniform, every held-out staircase). Trials run in parallel, one episode
+each, deterministic policy: the exported RUN_DIR/policy, those exported at milestone budgets too
+(--milestones), or with --checkpoint [STEP] a training checkpoint (a killed run has no export yet).
+Writes RUN_DIR/eval-<scene>[@<budget>].json (mean +- std of progress, success, COG deviation,
+|pitch rate|, tip-overs, episode length) and one database row per trial.
 """
 
 from __future__ import annotations
@@ -25,8 +28,33 @@ from scenes.staircase import STAIR_HARD, STAIR_PARAMS
 SCENES = ("hardest", "uniform", "incremental", "train")
 
 
+HELD_OUT = "held-out/"  # scene name prefix of the task's fixed held-out staircases (evaluation.held_out)
+
+
+def suite_scenes(cfg: TaskConfig) -> list[str]:
+  """A study's evaluation suite: hardest, uniform and each held-out staircase (stair tasks), uniform (nav)."""
+  if cfg.scene.kind != "stairs":
+    return ["uniform"]
+  return ["hardest", "uniform", *(HELD_OUT + h.name for h in cfg.evaluation.held_out)]
+
+
+def _held_out(cfg: TaskConfig, scene: str) -> TaskConfig:
+  """The task with every episode on one held-out staircase."""
+  named = {h.name: h for h in cfg.evaluation.held_out}
+  h = named.get(scene[len(HELD_OUT):])
+  if h is None:
+    raise ConfigError(f"scene {scene!r}: the task's evaluation.held_out names {sorted(named) or 'no staircase'}")
+  pinned = {name: (getattr(h, name),) * 2 for name in STAIR_PARAMS}
+  return dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, sampler="uniform", **pinned))
+
+
 def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
+  """The task with its scenes drawn as an evaluation scene says (SCENES, or held-out/NAME)."""
   s = cfg.scene
+  if scene.startswith(HELD_OUT):
+    return _held_out(cfg, scene)
+  if scene not in SCENES:
+    raise ConfigError(f"unknown scene {scene!r}: one of {SCENES} or {HELD_OUT}NAME")
   if scene == "hardest":
     if s.kind != "stairs":
       raise ConfigError("scene 'hardest' exists for stair tasks only")
@@ -100,11 +128,12 @@ def run_trials(cfg: TaskConfig, make_act, params, trials: int, eps: float, seed:
   return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
 
 
-def _policy(run_dir: str, checkpoint: str | None):
-  """(make_act, params, step) of the exported policy, or of a checkpoint ('latest' or a step number)."""
+def _policy(run_dir: str, checkpoint: str | None, milestone: int | None = None):
+  """(make_act, params, step) of the exported policy, of the one exported at a milestone budget, or
+  of a checkpoint ('latest' or a step number)."""
   from train.policy import act_from_params, load_checkpoint_params, load_policy_info, load_policy_params  # noqa: PLC0415
   if checkpoint is None:
-    policy_dir = os.path.join(run_dir, "policy")
+    policy_dir = os.path.join(run_dir, "policy" if milestone is None else milestone_folder(milestone))
     spec, params = load_policy_params(policy_dir)
     return act_from_params(spec), params, load_policy_info(policy_dir).get("step")
   if checkpoint != "latest" and not checkpoint.isdigit():
@@ -113,7 +142,18 @@ def _policy(run_dir: str, checkpoint: str | None):
   return act_from_params(spec), params, step
 
 
-def _record_trials(args: argparse.Namespace, run_id: str, per_trial: dict) -> None:
+def milestone_folder(budget: int) -> str:
+  """Where a run exports its policy at a step budget (train.run --milestones), inside its folder."""
+  return os.path.join("milestones", str(budget))
+
+
+def saved_milestones(run_dir: str) -> list[int]:
+  """The budgets a run exported a policy at, ascending."""
+  path = os.path.join(run_dir, "milestones")
+  return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []
+
+
+def _record_trials(args: argparse.Namespace, run_id: str, scene: str, budget: int | None, per_trial: dict) -> None:
   """One database row per trial, where the run is in the database."""
   from train.db import ExperimentDB, default_path  # noqa: PLC0415
   db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(args.run_dir))))
@@ -123,26 +163,87 @@ def _record_trials(args: argparse.Namespace, run_id: str, per_trial: dict) -> No
     print(f"note: run {run_id} is not in {db.path}; trials not recorded there", file=sys.stderr)
     return
   db.log_evals(run_id, [
-      {"scene": args.scene, "trial": i, "progress": float(per_trial["progress"][i]),
+      {"scene": scene, "budget": budget, "trial": i, "progress": float(per_trial["progress"][i]),
        "success": int(per_trial["success"][i] > 0), "cog_deviation": float(per_trial["cog_deviation"][i]),
        "pitch_rate": float(per_trial["pitch_rate"][i]), "tipped_over": int(per_trial["tipped_over"][i] > 0),
-       "length": int(per_trial["length"][i])} for i in range(args.trials)])
+       "length": int(per_trial["length"][i])} for i in range(args.trials)], replace=(scene, budget))
 
 
-def main(argv: list[str] | None = None) -> int:
+def parser() -> argparse.ArgumentParser:
   p = argparse.ArgumentParser(prog="python -m train.evaluate", description=__doc__.splitlines()[0])
   p.add_argument("run_dir")
   p.add_argument("--trials", type=int, default=EVAL_TRIALS)
-  p.add_argument("--scene", choices=SCENES, default="hardest")
+  p.add_argument("--scene", default="hardest", help=f"one of {', '.join(SCENES)} or {HELD_OUT}NAME "
+                 "(a staircase of the task's evaluation.held_out)")
+  p.add_argument("--suite", action="store_true", help="every scene of the task's evaluation suite "
+                 "(hardest, uniform, each held-out staircase) instead of --scene")
   p.add_argument("--eps", type=float, default=EVAL_EPS, help="difficulty for incremental / train scenes")
   p.add_argument("--seed", type=int, default=EVAL_SEED)
-  p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>.json)")
+  p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>[@<budget>].json; one scene only)")
   p.add_argument("--db", help="experiment database (default: beside the run directory)")
-  p.add_argument("--video", help="MP4 of trial 0 (needs the video extra)")
+  p.add_argument("--video", help="MP4 of trial 0 (needs the video extra; one scene only)")
   p.add_argument("--checkpoint", nargs="?", const="latest", metavar="STEP",
                  help="evaluate a training checkpoint (default the latest) instead of RUN_DIR/policy, "
                       "e.g. of a killed run")
-  args = p.parse_args(argv)
+  p.add_argument("--milestones", action="store_true", help="also evaluate the policy exported at each "
+                 "milestone budget (train.run --milestones), RUN_DIR/milestones/<budget>")
+  return p
+
+
+def report_path(run_dir: str, scene: str, budget: int | None) -> str:
+  """RUN/eval-<scene>[@<budget>].json (a held-out scene's / becomes -)."""
+  at = "" if budget is None else f"@{budget}"
+  return os.path.join(run_dir, f"eval-{scene.replace('/', '-')}{at}.json")
+
+
+def _evaluate(args, meta: dict, scene: str, budget: int | None, cfg0: TaskConfig) -> str:
+  """Runs one scene with one policy; writes its report and trials; returns the summary line."""
+  import jax  # noqa: PLC0415
+  cfg = scene_config(cfg0, scene)
+  make_act, params, policy_step = _policy(args.run_dir, args.checkpoint, budget)
+  per_trial, qpos, render_model = run_trials(cfg, make_act, params, args.trials, args.eps, args.seed,
+                                             bool(args.video))
+  m = {k: {"mean": float(v.mean()), "std": float(v.std())} for k, v in per_trial.items()}
+  report = {
+      "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": scene, "budget": budget,
+      "eps": args.eps if scene in ("incremental", "train") else None,
+      "trials": args.trials, "policy_step": policy_step, "checkpoint": args.checkpoint is not None,
+      "metrics": m, "per_trial": {k: v.tolist() for k, v in per_trial.items()},
+      "device": str(jax.devices()[0]), "command": "python -m train.evaluate " + " ".join(args.argv),
+      "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
+  out = args.out or report_path(args.run_dir, scene, budget)
+  with open(out, "w") as f:
+    json.dump(report, f, indent=1)
+  _record_trials(args, meta["run_id"], scene, budget, per_trial)
+  if args.video:
+    from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
+    write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)
+  at = "" if budget is None else f" @ {budget:,} steps"
+  return (f"{meta['task']} {scene}{at}: {args.trials} trials, progress {m['progress']['mean']:.3f} +- "
+          f"{m['progress']['std']:.3f}, success {m['success']['mean']:.2f}, COG deviation "
+          f"{m['cog_deviation']['mean']:.3f} +- {m['cog_deviation']['std']:.3f} m, |pitch rate| "
+          f"{m['pitch_rate']['mean']:.3f} rad/s, tip-overs {m['tipped_over']['mean']:.2f}, length "
+          f"{m['length']['mean']:.1f} -> {out}")
+
+
+def _jobs(args, cfg: TaskConfig) -> list[tuple[str, int | None]]:
+  """(scene, milestone budget or None for the final policy) pairs to evaluate; ValueError on bad input."""
+  scenes = suite_scenes(cfg) if args.suite else [args.scene]
+  for scene in scenes:
+    scene_config(cfg, scene)  # ConfigError on an unknown scene
+  budgets: list[int | None] = [None]
+  if args.milestones:
+    if args.checkpoint is not None:
+      raise ValueError("--milestones evaluates exported policies; drop --checkpoint")
+    budgets = [*saved_milestones(args.run_dir), None]
+  if len(scenes) * len(budgets) > 1 and (args.out or args.video):
+    raise ValueError("--out and --video take one scene and one policy")
+  return [(scene, b) for b in budgets for scene in scenes]
+
+
+def main(argv: list[str] | None = None) -> int:
+  args = parser().parse_args(argv)
+  args.argv = sys.argv[1:] if argv is None else argv
   run_json = os.path.join(args.run_dir, "run.json")
   if not os.path.exists(run_json):
     print(f"error: {args.run_dir} is not a run directory (no run.json)", file=sys.stderr)
@@ -150,42 +251,17 @@ def main(argv: list[str] | None = None) -> int:
   if args.trials < 1 or not 0.0 <= args.eps <= 1.0:
     print("error: --trials must be >= 1 and --eps in [0, 1]", file=sys.stderr)
     return 2
-  import jax  # noqa: PLC0415
-
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   with open(run_json) as f:
     meta = json.load(f)
   try:
-    cfg = scene_config(from_dict(meta["config"]), args.scene)
-    make_act, params, policy_step = _policy(args.run_dir, args.checkpoint)
+    cfg = from_dict(meta["config"])
+    for scene, budget in _jobs(args, cfg):
+      print(_evaluate(args, meta, scene, budget, cfg), flush=True)
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
-  per_trial, qpos, render_model = run_trials(cfg, make_act, params, args.trials, args.eps, args.seed,
-                                             bool(args.video))
-  stats = {k: {"mean": float(v.mean()), "std": float(v.std())} for k, v in per_trial.items()}
-  report = {
-      "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": args.scene,
-      "eps": args.eps if args.scene in ("incremental", "train") else None,
-      "trials": args.trials, "policy_step": policy_step, "checkpoint": args.checkpoint is not None,
-      "metrics": stats,
-      "per_trial": {k: v.tolist() for k, v in per_trial.items()},
-      "device": str(jax.devices()[0]), "command": "python -m train.evaluate " + " ".join(argv or sys.argv[1:]),
-      "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
-  out = args.out or os.path.join(args.run_dir, f"eval-{args.scene}.json")
-  with open(out, "w") as f:
-    json.dump(report, f, indent=1)
-  _record_trials(args, meta["run_id"], per_trial)
-  if args.video:
-    from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
-    write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)
-  m = stats
-  print(f"{meta['task']} {args.scene}: {args.trials} trials, progress {m['progress']['mean']:.3f} +- "
-        f"{m['progress']['std']:.3f}, success {m['success']['mean']:.2f}, COG deviation "
-        f"{m['cog_deviation']['mean']:.3f} +- {m['cog_deviation']['std']:.3f} m, |pitch rate| "
-        f"{m['pitch_rate']['mean']:.3f} rad/s, tip-overs {m['tipped_over']['mean']:.2f}, length "
-        f"{m['length']['mean']:.1f} -> {out}")
   return 0
 
 

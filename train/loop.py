@@ -71,8 +71,11 @@ class Loop:
   def __init__(self, update, steps_per_update: int, checkpointer: Checkpointer, reporter,
                report_every: int, stop, early_stop: EarlyStop | None = None,
                evaluate: Callable | None = None, eval_every: int | None = None,
-               probe: Callable | None = None, probe_every: int = 0):
+               probe: Callable | None = None, probe_every: int = 0,
+               milestones: tuple[int, ...] = (), on_milestone: Callable | None = None):
+    """on_milestone(state, step, budget): called at the first update at or past each milestone budget."""
     self.update, self.spu = update, steps_per_update
+    self.milestones, self.on_milestone = milestones, on_milestone
     self.checkpointer, self.reporter, self.stop = checkpointer, reporter, stop
     self.report_every = max(report_every, steps_per_update)
     self.early = early_stop
@@ -87,6 +90,7 @@ class Loop:
     self.checkpointer.last_t = self.mark_t = time.monotonic()
     self.mark_step, self.paused_s = step, 0.0
     reason, streak = "done", 0
+    milestones = [b for b in self.milestones if b > step]  # a resumed run passed the others already
     while step < total and reason == "done":
       stop, ckpt = _agree(self.stop.requested is not None, self.checkpointer.due())
       if stop:
@@ -97,6 +101,8 @@ class Loop:
       state, metrics = self.update(state)
       step += self.spu
       pending.append(metrics)
+      while milestones and step >= milestones[0] and self.on_milestone is not None:
+        self._paused(self.on_milestone, state, step, milestones.pop(0))
       rows = []
       if step >= next_report or step >= total:
         rows.append(self._report(step, acc, pending))

@@ -37,6 +37,7 @@ class RunPlan:
   early_stop: EarlyStop | None
   probe_every: int  # steps between hardest-staircase probes (0: none)
   start_step: int = 0  # the checkpoint a resumed run continues from
+  milestones: tuple[int, ...] = ()  # step budgets at which the policy is exported to RUN/milestones/<budget>
 
 
 def _default_preset() -> str:
@@ -45,7 +46,8 @@ def _default_preset() -> str:
 
 
 # options a resumed run takes from its run.json; giving one with --resume is refused
-RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "probe_every")
+RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "probe_every",
+                "milestones")
 
 
 def _plan_resume(args: argparse.Namespace) -> RunPlan:
@@ -76,7 +78,7 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   cfg = from_dict(meta["config"])
   return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
                  preset, meta["seed"], tuple(meta["overrides"]), cfg, total, meta["num_envs"], True,
-                 _early_stop_of(meta, cfg), meta.get("probe_every", 0), done)
+                 _early_stop_of(meta, cfg), meta.get("probe_every", 0), done, tuple(meta.get("milestones") or ()))
 
 
 def _early_stop_of(meta: dict, cfg) -> EarlyStop | None:
@@ -152,7 +154,20 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     raise RunError(str(e))
   probe_every = _probe_every(args.probe_every, early, preset, cfg)
   return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
-                 cfg, steps, num_envs, False, early, probe_every)
+                 cfg, steps, num_envs, False, early, probe_every, milestones=parse_milestones(getattr(args, "milestones", None), steps))
+
+
+def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:
+  """'250000,500000' -> (250000, 500000): distinct step budgets in [1, total), ascending."""
+  if not text:
+    return ()
+  try:
+    budgets = sorted({int(x) for x in text.split(",") if x.strip()})
+  except ValueError:
+    raise RunError(f"--milestones takes step counts separated by commas, e.g. 250000,500000; got {text!r}")
+  if not budgets or budgets[0] < 1 or budgets[-1] >= total:
+    raise RunError(f"--milestones must lie in [1, {total:,}) (the run's --steps); got {text!r}")
+  return tuple(budgets)
 
 
 def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int:
@@ -180,7 +195,7 @@ def write_run_json(plan: RunPlan) -> None:
           "seed": plan.seed, "overrides": list(plan.overrides), "config": plan.cfg.to_dict(),
           "total_steps": plan.total_steps, "num_envs": plan.num_envs,
           "early_stop": str(plan.early_stop) if plan.early_stop else None, "probe_every": plan.probe_every,
-          "created": created}
+          "milestones": list(plan.milestones), "created": created}
   tmp = path + ".tmp"
   with open(tmp, "w") as f:
     json.dump(meta, f, indent=1)

@@ -52,6 +52,9 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--probe-every", type=int, metavar="STEPS",
                  help="steps between evaluations on the hardest staircase (the trials of train.evaluate "
                       "--scene hardest); 0: none (default: the preset's, stair tasks only)")
+  p.add_argument("--milestones", metavar="STEPS,STEPS",
+                 help="step budgets at which the policy is also exported, to RUN/milestones/<budget>/ "
+                      "(at the first update at or past each), e.g. 250000,500000; train.evaluate --milestone")
   p.add_argument("--checkpoint-every", type=float, default=CHECKPOINT_EVERY_S, metavar="SECONDS",
                  help=f"wall time between checkpoints (default {CHECKPOINT_EVERY_S:g} s)")
   p.add_argument("--keep-checkpoints", type=int, default=KEEP, metavar="K",

@@ -15,6 +15,7 @@ from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunChec
 from train.loop import Checkpointer, Loop, LoopResult
 from train.mesh import from_host, to_host
 from train.plan import RunError, RunPlan
+from train.evaluate import milestone_folder
 from train.probe import HardestProbe
 from train.progress import Reporter
 
@@ -73,20 +74,26 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) ->
   eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
   probe = HardestProbe(t) if plan.probe_every else None
   loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, p.training_metrics_steps, stop,
-              plan.early_stop, _evaluator(t), eval_every, probe, plan.probe_every)
+              plan.early_stop, _evaluator(t), eval_every, probe, plan.probe_every,
+              plan.milestones, lambda state, step, budget: _export(t, state, step, milestone_folder(budget)))
   return loop, reporter
+
+
+def _export(t: Training, state, step: int, folder: str = "policy") -> str:
+  """Exports the state's policy to RUN/<folder> (every process gathers, process 0 writes)."""
+  normalizer, policy = to_host(t.learner.policy_params(state))
+  plan = t.plan
+  if jax.process_index() != 0:
+    return os.path.join(plan.out_dir, folder)
+  return export_policy(plan.out_dir, normalizer, policy, t.spec,
+                       {"task": plan.task, "algo": plan.algo, "step": step, "run_id": plan.run_id,
+                        "config": plan.cfg.to_dict()}, folder)
 
 
 def _finish(t: Training, result: LoopResult, checkpointer: Checkpointer) -> str:
   """Checkpoints the final state and exports its policy; returns the policy directory."""
   checkpointer.save(result.state, result.step)
-  normalizer, policy = to_host(t.learner.policy_params(result.state))
-  plan = t.plan
-  if jax.process_index() != 0:
-    return os.path.join(plan.out_dir, "policy")
-  return export_policy(plan.out_dir, normalizer, policy, t.spec,
-                       {"task": plan.task, "algo": plan.algo, "step": result.step, "run_id": plan.run_id,
-                        "config": plan.cfg.to_dict()})
+  return _export(t, result.state, result.step)
 
 
 def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions()) -> dict[str, Any]:

@@ -8,6 +8,7 @@ type and each range, and fails with a message that names the dotted key.
 from __future__ import annotations
 
 import dataclasses
+import re
 import importlib.resources
 import pathlib
 import typing
@@ -150,6 +151,33 @@ class EpisodeConfig:
 
 
 @dataclasses.dataclass(frozen=True)
+class HeldOutScene:
+  """A fixed staircase every finished study run is evaluated on (not drawn by the training sampler)."""
+  name: str
+  tread: float  # m, l
+  riser: float  # m, h
+  steps: int  # n
+
+  def validate(self, key: str) -> None:
+    from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
+    require(bool(re.match(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", self.name)), f"{key}.name",
+            f"{self.name!r} is not a plain name (letters, digits, _ . -)")
+    for name, (lo, hi) in zip(STAIR_PARAMS, STAIR_LIMITS):
+      require(lo <= getattr(self, name) <= hi, f"{key}.{name}", f"must be in [{lo}, {hi}], got {getattr(self, name)}")
+
+
+@dataclasses.dataclass(frozen=True)
+class EvaluationConfig:
+  held_out: tuple[HeldOutScene, ...]  # stair tasks: fixed staircases of the evaluation suite
+
+  def validate(self, key: str) -> None:
+    names = [h.name for h in self.held_out]
+    require(len(set(names)) == len(names), f"{key}.held_out", f"names repeat: {names}")
+    for i, h in enumerate(self.held_out):
+      h.validate(f"{key}.held_out[{i}]")
+
+
+@dataclasses.dataclass(frozen=True)
 class TaskConfig:
   """A task: every section; the defaults of every key live in configs/defaults.yaml."""
 
@@ -161,6 +189,7 @@ class TaskConfig:
   reward: RewardConfig
   episode: EpisodeConfig
   physics: PhysicsConfig
+  evaluation: EvaluationConfig
 
   def validate(self, key: str = "") -> None:
     from mjx_tracks.robots import ROBOTS  # noqa: PLC0415
@@ -178,6 +207,7 @@ class TaskConfig:
       from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
       require("w" in CONTROL_MODES[self.control.mode], "control.mode",
              "navigation needs a mode with angular velocity w")
+      require(not self.evaluation.held_out, "evaluation.held_out", "held-out staircases need a stair task")
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
 
@@ -275,15 +305,16 @@ def available_tasks() -> list[str]:
 
 
 # keys added since runs were first recorded -> the value that reproduces what those runs ran
-ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1}  # before culling: every contact
+ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  # before culling: every contact
+              ("evaluation", "held_out"): []}  # before the evaluation suite: none
 
 
 def _with_added_keys(raw: dict) -> dict:
   """A recorded config (run.json) from before a key existed, with that key's old behaviour."""
   raw = dict(raw)
   for (section, key), value in ADDED_KEYS.items():
-    if isinstance(raw.get(section), dict) and key not in raw[section]:
-      raw[section] = {**raw[section], key: value}
+    if isinstance(raw.get(section, {}), dict) and key not in raw.get(section, {}):
+      raw[section] = {**raw.get(section, {}), key: value}
   return raw
 
 

@@ -1,7 +1,8 @@
 """`python -m train.study STUDY [--set KEY=VALUE] [--plan]`: run a study (a YAML path, or the NAME
 of one in configs/studies/) on a Dask cluster: by default one started here (a worker per GPU, CPU
 slots), or an existing one (--scheduler). Finished runs of an earlier start are skipped; --plan
-lists the runs and stops. `python -m train.study status NAME [--runs]`: where it stands."""
+lists the runs and stops. `python -m train.study status NAME [--runs]`: where it stands;
+`python -m train.study report NAME`: STUDY/report.md with statistics and figures."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import sys
 
 from mjx_tracks.envs.config import ConfigError
 from train.study.executor import STUDY_DB, cell_folder_of
-from train.study.spec import cells, load_study
+from train.study.spec import cells, load_study, runs_of
 
 
 def parser() -> argparse.ArgumentParser:
@@ -52,6 +53,9 @@ def main(argv=None) -> int:
   if argv[:1] == ["status"]:
     from train.study.status import main as status_main  # noqa: PLC0415
     return status_main(argv[1:])
+  if argv[:1] == ["report"]:
+    from train.study.report import main as report_main  # noqa: PLC0415
+    return report_main(argv[1:])
   args = parser().parse_args(argv)
   try:
     spec = load_study(args.study, tuple(args.set))
@@ -62,9 +66,9 @@ def main(argv=None) -> int:
   if not args.plan:
     return _run(spec, folder, args)
   runs = cells(spec)
-  budgets = ", ".join(f"{g.name} {len(g.steps)}" for g in spec.groups)
-  print(f"study {spec.name}: {len(runs)} runs = {len(spec.tasks)} tasks x {len(spec.seeds)} seeds x budgets "
-        f"per group ({budgets}); retries per run: {spec.retries} -> {folder}")
+  per = ", ".join(f"{g.name} {len(runs_of(g))}" for g in spec.groups)
+  print(f"study {spec.name}: {len(runs)} runs = {len(spec.tasks)} tasks x {len(spec.seeds)} seeds x runs "
+        f"per group ({per}); retries per run: {spec.retries} -> {folder}")
   for c in runs:
     args_ = c.run_args(cell_folder_of(folder, c.id), os.path.join(folder, STUDY_DB))
     print(f"{c.id}: python -m train.run {shlex.join(args_)}")

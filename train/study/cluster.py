@@ -26,7 +26,9 @@ def _nanny(slots: int, kind: str, env: dict, cls) -> dict:
 def worker_specs(gpus: list[str], slots_per_gpu: int, cpu_slots: int) -> dict:
   """SpecCluster worker specs; resources `gpu` / `cpu` count run slots."""
   from distributed import Nanny  # noqa: PLC0415
-  specs = {f"gpu{g}": _nanny(slots_per_gpu, "gpu", {"CUDA_VISIBLE_DEVICES": g}, Nanny) for g in gpus}
+  # runs sharing a GPU split its memory (JAX takes 75 % of it per process by default)
+  share = {"XLA_PYTHON_CLIENT_MEM_FRACTION": f"{0.9 / slots_per_gpu:.2f}"} if slots_per_gpu > 1 else {}
+  specs = {f"gpu{g}": _nanny(slots_per_gpu, "gpu", {"CUDA_VISIBLE_DEVICES": g, **share}, Nanny) for g in gpus}
   if cpu_slots:
     specs["cpu"] = _nanny(cpu_slots, "cpu", {"JAX_PLATFORMS": "cpu", "CUDA_VISIBLE_DEVICES": ""}, Nanny)
   return specs

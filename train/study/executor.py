@@ -29,6 +29,12 @@ def cell_folder(study_folder: str, cell: Cell) -> str:
   return cell_folder_of(study_folder, cell.id)
 
 
+def _run_id(run_folder: str) -> str | None:
+  """The run id in a run folder's run.json, if it has one yet."""
+  path = os.path.join(run_folder, "run.json")
+  return json.load(open(path)).get("run_id") if os.path.exists(path) else None
+
+
 @dataclasses.dataclass
 class StudyState:
   """STUDY/state.json: {cell id: {"status": queued|running|done|failed, "attempts": [...]}};
@@ -81,6 +87,8 @@ class StudyRunner:
     self.backends = backends
     self.cells = {c.id: c for c in cells(spec)}
     os.makedirs(os.path.join(folder, "runs"), exist_ok=True)
+    from train.study.results import write_spec  # noqa: PLC0415  (results imports this module)
+    write_spec(folder, spec)
     self.state = StudyState.load(folder, list(self.cells))
 
   def _submit(self, cid: str):
@@ -93,7 +101,7 @@ class StudyRunner:
     train = not (last and last.get("phase") == "evaluate" and has_run)  # training finished: evaluate again only
     record["status"] = "running"
     record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
-    eval_args = ["--scene", "hardest", "--trials", str(self.spec.eval_trials)]
+    eval_args = ["--suite", "--trials", str(self.spec.eval_trials), *(["--milestones"] if cell.milestones else [])]
     backend = cell.backend if cell.backend in self.backends else self.backends[0]
     return self.client.submit(run_cell, cell.train_args(), eval_args, resume, train, self.commands,
                               key=f"{cid}/attempt-{len(record['attempts'])}", pure=False, resources={backend: 1})
@@ -106,14 +114,15 @@ class StudyRunner:
       res = future.result()
     except Exception as e:  # the task raised, or its worker died (distributed.KilledWorker)
       res = {"rc": None, "phase": "train", "tar": None, "log_tail": "", "worker": None, "error": repr(e)}
+    db, local = ExperimentDB(os.path.join(self.folder, STUDY_DB)), cell_folder(self.folder, self.cells[cid])
     if res["tar"] is not None:
-      local = cell_folder(self.folder, self.cells[cid])
       shutil.rmtree(local, ignore_errors=True)
       unpack(res["tar"], local)
       if os.path.exists(os.path.join(local, RUN_DB)):
-        ExperimentDB(os.path.join(self.folder, STUDY_DB)).import_runs(os.path.join(local, RUN_DB), local)
+        db.import_runs(os.path.join(local, RUN_DB), local)
     attempt.update(ended=time.time(), rc=res["rc"], phase=res["phase"], worker=res["worker"],
                    error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
+    db.log_attempt(self.spec.name, cid, len(record["attempts"]), attempt, _run_id(local))
     failures = sum(1 for a in record["attempts"] if a["rc"] != 0 and not a.get("stopped"))
     retry = res["rc"] != 0 and failures <= self.spec.retries
     record["status"] = "done" if res["rc"] == 0 else "queued" if retry else "failed"

@@ -15,9 +15,10 @@ from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks
 from train.early_stop import parse_early_stop
 from train.presets import get_preset
 
-STUDY_DEFAULTS = {"retries": 1, "eval_trials": 100}
-GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu"}
+STUDY_DEFAULTS = {"retries": 1, "eval_trials": 100, "compare": []}
+GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu", "budgets": "runs"}
 BACKENDS = ("gpu", "cpu")
+BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")  # study and group names: folder names too
 
 
@@ -31,6 +32,7 @@ class GroupSpec:
   early_stop: str  # an --early-stop criterion, or "" for none
   set: tuple[str, ...]  # config overrides KEY=VALUE, after the preset's
   backend: str  # gpu | cpu: the workers that run its cells (cpu: e.g. one-robot runs)
+  budgets: str  # BUDGETS: runs | milestones
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,6 +43,7 @@ class StudySpec:
   groups: tuple[GroupSpec, ...]
   retries: int  # attempts after a failed one, each from the run's last checkpoint
   eval_trials: int  # trials per evaluation scene of every finished run
+  compare: tuple[tuple[str, str], ...]  # task pairs (A, B): the report's probability that A beats B
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,6 +58,7 @@ class Cell:
   early_stop: str
   overrides: tuple[str, ...]
   backend: str  # gpu | cpu: which workers run it
+  milestones: tuple[int, ...] = ()  # smaller budgets whose policies this run exports and evaluates
 
   @property
   def id(self) -> str:
@@ -66,7 +70,13 @@ class Cell:
             "--seed", str(self.seed)]
     for item in self.overrides:
       args += ["--set", item]
+    if self.milestones:
+      args += ["--milestones", ",".join(map(str, self.milestones))]
     return args + (["--early-stop", self.early_stop] if self.early_stop else [])
+
+  def budgets(self) -> tuple[int, ...]:
+    """The step budgets this run's evaluations stand for."""
+    return (*self.milestones, self.steps)
 
   def run_args(self, out: str, db: str) -> list[str]:
     return [*self.train_args(), "--out", out, "--db", db]
@@ -83,6 +93,9 @@ def _group(raw, i: int) -> GroupSpec:
     raise ConfigError(f"{key}: {e}") from None
   require(bool(g.steps) and all(n >= 1 for n in g.steps), f"{key}.steps", "one or more budgets >= 1")
   require(g.backend in BACKENDS, f"{key}.backend", f"one of {BACKENDS}, got {g.backend!r}")
+  require(g.budgets in BUDGETS, f"{key}.budgets", f"one of {BUDGETS}, got {g.budgets!r}")
+  require(g.budgets == "runs" or not g.early_stop, f"{key}.budgets",
+          "milestones stand for smaller budgets of one run; an early stop would cut them short")
   return g
 
 
@@ -113,6 +126,9 @@ def study_from_dict(raw: dict) -> StudySpec:
   require(bool(spec.tasks) and bool(spec.seeds), "tasks / seeds", "each needs one or more entries")
   require(len(set(spec.seeds)) == len(spec.seeds) and min(spec.seeds) >= 0, "seeds", "distinct integers >= 0")
   require(spec.retries >= 0 and spec.eval_trials >= 1, "retries / eval_trials", "retries >= 0, eval_trials >= 1")
+  for i, pair in enumerate(spec.compare):
+    require(pair[0] != pair[1] and set(pair) <= set(spec.tasks), f"compare[{i}]",
+            f"two different tasks of the study, got {list(pair)}")
   _check_runs(spec)
   return spec
 
@@ -136,7 +152,15 @@ def load_study(path: str, overrides: tuple[str, ...] = ()) -> StudySpec:
   return study_from_dict(raw)
 
 
+def runs_of(g: GroupSpec) -> list[tuple[int, tuple[int, ...]]]:
+  """(steps, milestones) of each run of a group: one per budget, or one with the smaller as milestones."""
+  if g.budgets == "milestones":
+    budgets = sorted(set(g.steps))
+    return [(budgets[-1], tuple(budgets[:-1]))]
+  return [(steps, ()) for steps in g.steps]
+
+
 def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order."""
-  return [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend)
-          for g in spec.groups for task in spec.tasks for steps in g.steps for seed in spec.seeds]
+  return [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones)
+          for g in spec.groups for task in spec.tasks for steps, milestones in runs_of(g) for seed in spec.seeds]

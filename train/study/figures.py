@@ -1,0 +1,84 @@
+"""The study report's figures (matplotlib, PNG): learning curves per group with bootstrap bands,
+against environment steps and wall time, and final success per budget with IQM intervals."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from train.study.results import CURVE_METRICS, StudyResults
+from train.study.statistics import curve_band, iqm_intervals
+
+X_AXES = {"step": "environment steps", "wall_s": "wall time (s)"}
+LABELS = {"return_mean": "return", "success_rate": "success", "progress_mean": "progress", "eps": "eps",
+          "cog_deviation_mean": "COG deviation (m)", "pitch_rate_mean": "|pitch rate| (rad/s)"}
+
+
+def _pyplot():
+  import matplotlib  # noqa: PLC0415
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt  # noqa: PLC0415
+  return plt
+
+
+def curves_figure(results: StudyResults, group: str, x: str):
+  """One panel per training metric; a line per task: mean over runs with its 95 % bootstrap band."""
+  plt = _pyplot()
+  fig, axes = plt.subplots(2, 3, figsize=(13, 6.5), constrained_layout=True)
+  for ax, metric in zip(axes.flat, CURVE_METRICS):
+    for task in results.spec.tasks:
+      runs = results.curves(group, task, x, metric)
+      if not runs:
+        continue
+      grid, mean, lo, hi = curve_band(runs)
+      line, = ax.plot(grid, mean, label=f"{task} ({len(runs)} runs)")
+      ax.fill_between(grid, lo, hi, color=line.get_color(), alpha=0.2, linewidth=0)
+    ax.set_xlabel(X_AXES[x])
+    ax.set_ylabel(LABELS[metric])
+    ax.grid(alpha=0.3)
+  axes.flat[0].legend(fontsize=8)
+  fig.suptitle(f"{group}: training episodes, mean and 95 % bootstrap band over seeds")
+  return fig
+
+
+def final_figure(results: StudyResults, group: str, metric: str = "success"):
+  """One panel per evaluation scene: IQM of `metric` over seeds per budget, a line per task."""
+  plt = _pyplot()
+  scenes = results.scenes()
+  fig, axes = plt.subplots(1, len(scenes), figsize=(3.6 * len(scenes), 3.4), constrained_layout=True,
+                           squeeze=False)
+  budgets = sorted({b for g, _, b in results.groups() if g == group})
+  for ax, scene in zip(axes[0], scenes):
+    for task in results.spec.tasks:
+      est = iqm_intervals({str(b): results.final(group, task, b, scene, metric) for b in budgets})
+      xs = [b for b in budgets if str(b) in est]
+      if xs:
+        mid = np.array([est[str(b)][0] for b in xs])
+        err = np.array([[m - est[str(b)][1], est[str(b)][2] - m] for b, m in zip(xs, mid)]).T
+        ax.errorbar(xs, mid, yerr=err, marker="o", capsize=3, label=task)
+    ax.set_xscale("log" if len(budgets) > 1 else "linear")
+    ax.set_title(scene, fontsize=10)
+    ax.set_xlabel("step budget")
+    ax.set_ylim(-0.05, 1.05)
+    ax.grid(alpha=0.3)
+  axes[0][0].set_ylabel(f"{metric} (IQM, 95 % CI)")
+  axes[0][0].legend(fontsize=8)
+  fig.suptitle(f"{group}: {metric} per evaluation scene (100-trial evaluations of each run)")
+  return fig
+
+
+def write_figures(results: StudyResults, folder: str) -> list[str]:
+  """Every figure of the report, as PNGs in `folder`; returns their file names."""
+  plt = _pyplot()
+  names = []
+  for g in results.spec.groups:
+    if not any(r.cell.group == g.name for r in results.runs):
+      continue
+    figs = {f"curves-{g.name}-{x}.png": curves_figure(results, g.name, x) for x in X_AXES}
+    figs[f"final-{g.name}.png"] = final_figure(results, g.name)
+    for name, fig in figs.items():
+      fig.savefig(os.path.join(folder, name), dpi=110)
+      plt.close(fig)
+      names.append(name)
+  return names

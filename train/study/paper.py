@@ -1,0 +1,9 @@
+"""The paper's Figure 9: 10 trials of one trained policy per task on the hardest staircase, as
+printed (mean +- sd; a task lists only the figures the paper gives for it)."""
+
+FIGURE9 = {
+    "asc-inc-cog": {"progress": "0.965 +- 0.05", "cog_deviation": "0.115 +- 0.008"},
+    "asc-uni-cog": {"progress": "0.82 +- 0.24", "cog_deviation": "0.125 +- 0.005"},
+    "des-inc-ang": {"pitch_rate": "0.215 +- 0.15"},
+    "des-uni-ang": {"pitch_rate": "0.235 +- 0.14"},
+}

@@ -1,0 +1,144 @@
+"""`python -m train.study report NAME`: STUDY/report.md and its PNG figures from a study's folder:
+final metrics per group (IQM over seeds, stratified bootstrap 95 % CIs, rliable), the probability
+of improvement of each `compare` pair, the paper's Figure 9 side by side, learning curves, attempts."""
+
+from __future__ import annotations
+
+import datetime
+import os
+
+import numpy as np
+
+from train.study.figures import write_figures
+from train.study.paper import FIGURE9
+from train.study.results import StudyResults, load_results
+from train.study.statistics import LEVEL, REPS, improvement, iqm_intervals
+
+REPORT = "report.md"
+FINAL_COLUMNS = (("success", "hardest"), ("progress", "hardest"), ("success", "uniform"))
+IMPROVEMENT_METRICS = (("success", "hardest"), ("progress", "hardest"), ("success", "uniform"), ("progress", "uniform"))
+
+
+def _ci(est: tuple[float, float, float] | None) -> str:
+  return "-" if est is None else f"{est[0]:.2f} [{est[1]:.2f}, {est[2]:.2f}]"
+
+
+def _mean_sd(x: np.ndarray, digits: int = 3) -> str:
+  return "-" if not len(x) else f"{x.mean():.{digits}f} +- {x.std():.{digits}f}"
+
+
+def final_table(results: StudyResults) -> list[str]:
+  """One row per (group, task, budget): IQM [95 % CI] of success / progress per scene, held-out
+  success, and mean +- sd over seeds of pitch rate and tip-overs on the hardest staircase."""
+  held = [s for s in results.scenes() if s.startswith("held-out/")]
+  cols = [f"{m} {s}" for m, s in FINAL_COLUMNS] + [f"success {s}" for s in held]
+  lines = [f"| group | task | budget | runs | {' | '.join(cols)} | pitch rate hardest (rad/s) | tip-overs hardest |",
+           "|---" * (len(cols) + 6) + "|"]
+  for group, task, budget in results.groups():
+    fig = lambda m, s: results.final(group, task, budget, s, m)  # noqa: E731
+    est = iqm_intervals({f"{m} {s}": fig(m, s) for m, s in [*FINAL_COLUMNS, *(("success", h) for h in held)]})
+    n = len(fig("success", results.scenes()[0])) if results.scenes() else 0
+    cells = [_ci(est.get(c)) for c in cols]
+    lines.append(f"| {group} | {task} | {budget:,} | {n} | {' | '.join(cells)} | "
+                 f"{_mean_sd(fig('pitch_rate', 'hardest'))} | {_mean_sd(fig('tipped_over', 'hardest'), 2)} |")
+  return lines
+
+
+def improvement_table(results: StudyResults) -> list[str]:
+  """P(A > B) [95 % CI] for every compare pair, group and budget, per metric and scene."""
+  lines = ["| group | budget | A | B | " + " | ".join(f"P(A > B), {m} {s}" for m, s in IMPROVEMENT_METRICS) + " |",
+           "|---" * (4 + len(IMPROVEMENT_METRICS)) + "|"]
+  budgets = sorted({(g, b) for g, _, b in results.groups()}, key=lambda k: ([g.name for g in results.spec.groups].index(k[0]), k[1]))
+  for group, budget in budgets:
+    for a, b in results.spec.compare:
+      fig = lambda task, m, s: results.final(group, task, budget, s, m)  # noqa: E731
+      est = improvement({f"{m} {s}": (fig(a, m, s), fig(b, m, s)) for m, s in IMPROVEMENT_METRICS})
+      if est:
+        lines.append(f"| {group} | {budget:,} | {a} | {b} | " +
+                     " | ".join(_ci(est.get(f"{m} {s}")) for m, s in IMPROVEMENT_METRICS) + " |")
+  return lines
+
+
+def paper_table(results: StudyResults) -> list[str]:
+  """The paper's Figure 9 (10 trials on the hardest staircase, one policy each) beside this study's
+  hardest-staircase figures: mean +- sd over seeds of each run's 100-trial mean."""
+  paper = FIGURE9
+  lines = ["| task | source | progress | COG deviation (m) | pitch rate (rad/s) |", "|---|---|---|---|---|"]
+  for task in results.spec.tasks:
+    p = paper.get(task, {})
+    lines.append(f"| {task} | paper (Figure 9) | {p.get('progress', '')} | {p.get('cog_deviation', '')} | "
+                 f"{p.get('pitch_rate', '')} |")
+    for group, t, budget in results.groups():
+      if t == task:
+        fig = lambda m: results.final(group, task, budget, "hardest", m)  # noqa: E731
+        lines.append(f"| {task} | {group} @ {budget:,} ({len(fig('progress'))} seeds) | {_mean_sd(fig('progress'))} | "
+                     f"{_mean_sd(fig('cog_deviation'))} | {_mean_sd(fig('pitch_rate'))} |")
+  return lines
+
+
+def attempts_lines(results: StudyResults) -> list[str]:
+  """Runs done / failed / unfinished, retried runs and every failed attempt's reason."""
+  state = results.state
+  n = {k: sum(1 for c in state.values() if c["status"] == k) for k in ("done", "failed")}
+  lines = [f"- {len(state)} runs: {n['done']} done, {n['failed']} failed, {len(state) - sum(n.values())} not finished; "
+           f"{sum(len(c['attempts']) for c in state.values())} attempts."]
+  for cid, c in state.items():
+    for i, a in enumerate(c["attempts"], 1):
+      if a.get("rc") not in (0, None) or a.get("error"):
+        reason = (a.get("error") or "").strip().splitlines()[-1:] or [""]
+        lines.append(f"- `{cid}` attempt {i} on {a.get('worker') or '?'}: rc {a.get('rc')}, {a.get('phase')}: {reason[0][:160]}")
+  return lines
+
+
+def report_text(results: StudyResults, figures: list[str], command: str) -> str:
+  """The whole report.md."""
+  date = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+  spec = results.spec
+  out = [f"# Study `{spec.name}`", "",
+         f"Written by `{command}` on {date}, from `{spec.name}/study.sqlite` and `state.json`. "
+         f"Tasks {', '.join(spec.tasks)}; seeds {', '.join(map(str, spec.seeds))}; "
+         f"{spec.eval_trials} trials per evaluation scene.", "",
+         "## Runs", "", *attempts_lines(results), "",
+         "## Final metrics", "",
+         f"Interquartile mean over seeds of each run's mean over its trials, with a stratified bootstrap "
+         f"{LEVEL:.0%} confidence interval ({REPS:,} resamples, rliable). Pitch rate and tip-overs: mean +- sd over seeds.",
+         "", *final_table(results), ""]
+  if spec.compare:
+    out += ["## Probability of improvement", "",
+            "P(A > B): the probability that a run of A scores above a run of B (ties count half), "
+            f"with its {LEVEL:.0%} bootstrap interval (rliable). 0.5: no difference.", "",
+            *improvement_table(results), ""]
+  out += ["## The paper's Figure 9 side by side", "",
+          "The paper evaluated one policy per task with 10 trials on the hardest staircase; here each "
+          "seed's policy has its own trials, and the figure is mean +- sd over seeds.", "",
+          *paper_table(results), "", "## Figures", ""]
+  out += [f"![{name}]({name})" for name in figures]
+  return "\n".join(out) + "\n"
+
+
+def write_report(folder: str, command: str) -> str:
+  """Writes STUDY/report.md and its figures; returns the report's path."""
+  results = load_results(folder)
+  figures = write_figures(results, folder)
+  path = os.path.join(folder, REPORT)
+  with open(path, "w") as f:
+    f.write(report_text(results, figures, command))
+  return path
+
+
+def main(argv: list[str]) -> int:
+  import argparse  # noqa: PLC0415
+  import sys  # noqa: PLC0415
+  p = argparse.ArgumentParser(prog="python -m train.study report", description=__doc__.splitlines()[0])
+  p.add_argument("name", help="the study's name (its folder under --root)")
+  p.add_argument("--root", default="studies")
+  args = p.parse_args(argv)
+  folder = os.path.join(args.root, args.name)
+  try:
+    path = write_report(folder, "python -m train.study report " + " ".join(argv))
+  except FileNotFoundError as e:
+    print(f"error: no study in {folder} ({e.filename} is missing); start it with python -m train.study "
+          f"{args.name}", file=sys.stderr)
+    return 2
+  print(f"report -> {path}")
+  return 0

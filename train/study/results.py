@@ -1,0 +1,94 @@
+"""A study's results as data: every finished run with its cell (group, task, seed, budgets), its
+training statistics and its evaluation trials, read from STUDY/state.json and STUDY/study.sqlite;
+the report and the study notebook both read them through here."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+
+import numpy as np
+
+from train.db import ExperimentDB
+from train.study.executor import STUDY_DB, cell_folder_of
+from train.study.spec import Cell, StudySpec, cells, load_study
+
+SPEC_FILE = "study.yaml"  # the study's spec as it ran, written into its folder
+EVAL_METRICS = ("success", "progress", "cog_deviation", "pitch_rate", "tipped_over")  # per trial
+CURVE_METRICS = ("return_mean", "success_rate", "progress_mean", "eps", "cog_deviation_mean", "pitch_rate_mean")
+
+
+@dataclasses.dataclass(frozen=True)
+class RunResult:
+  cell: Cell
+  run_id: str
+  stats: list[dict]  # training statistics rows (source 'train'), by step
+  evals: list[dict]  # evaluation trials; budget None = the run's own budget (cell.steps)
+
+
+@dataclasses.dataclass(frozen=True)
+class StudyResults:
+  spec: StudySpec
+  folder: str
+  runs: list[RunResult]
+  state: dict  # state.json's cells: status and attempts of every run
+
+  def groups(self) -> list[tuple[str, str, int]]:
+    """(group, task, budget) of every finished run's evaluations, in the spec's order."""
+    seen = {(r.cell.group, r.cell.task, b) for r in self.runs for b in r.cell.budgets()}
+    order = [(g.name, t, b) for g in self.spec.groups for t in self.spec.tasks for b in sorted(set(g.steps))]
+    return [k for k in order if k in seen]
+
+  def scenes(self) -> list[str]:
+    """Evaluation scenes, in the order the runs were evaluated on them."""
+    return list(dict.fromkeys(e["scene"] for r in self.runs for e in r.evals))
+
+  def final(self, group: str, task: str, budget: int, scene: str, metric: str) -> np.ndarray:
+    """One figure per finished run (seed) of the group: the mean of `metric` over its trials."""
+    out = []
+    for r in self.runs:
+      if (r.cell.group, r.cell.task) != (group, task) or budget not in r.cell.budgets():
+        continue
+      trials = [e[metric] for e in r.evals if e["scene"] == scene and (e["budget"] or r.cell.steps) == budget]
+      if trials:
+        out.append(float(np.mean(trials)))
+    return np.asarray(out)
+
+  def curves(self, group: str, task: str, x: str, metric: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(x, y) of each run of the group on a task: x 'step' or 'wall_s'; rows without y left out."""
+    out = []
+    for r in self.runs:
+      if (r.cell.group, r.cell.task) == (group, task):
+        rows = [s for s in r.stats if s.get(metric) is not None and s.get(x) is not None]
+        if rows:
+          out.append((np.array([s[x] for s in rows], float), np.array([s[metric] for s in rows], float)))
+    return out
+
+
+def write_spec(folder: str, spec: StudySpec) -> None:
+  """STUDY/study.yaml: the spec the study runs, so that `report` and `status` need only the folder."""
+  import yaml  # noqa: PLC0415
+  raw = json.loads(json.dumps(dataclasses.asdict(spec)))  # tuples -> lists
+  with open(os.path.join(folder, SPEC_FILE), "w") as f:
+    yaml.safe_dump(raw, f, sort_keys=False)
+
+
+def load_results(folder: str) -> StudyResults:
+  """Every finished run of the study in `folder`; FileNotFoundError if there is no study."""
+  spec = load_study(os.path.join(folder, SPEC_FILE))
+  state = json.load(open(os.path.join(folder, "state.json")))["cells"]
+  db = ExperimentDB(os.path.join(folder, STUDY_DB))
+  runs = []
+  for cell in cells(spec):
+    meta = os.path.join(cell_folder_of(folder, cell.id), "run.json")
+    if state.get(cell.id, {}).get("status") != "done" or not os.path.exists(meta):
+      continue
+    run_id = json.load(open(meta))["run_id"]
+    try:
+      db.run(run_id)
+    except KeyError:
+      continue
+    stats = [s for s in db.stats(run_id) if s["source"] == "train"]
+    runs.append(RunResult(cell, run_id, stats, db.evals(run_id)))
+  return StudyResults(spec, folder, runs, state)
