@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # On a GPU host: runs configs/studies/paper.yaml (PPO runs on the GPUs, 2 per GPU; the one-robot
 # SAC runs on CPU slots) for at most LIMIT seconds (a study stopped by the limit resumes where it
-# stopped when started again), writes its report, and packs the study folder without checkpoints
-# into $OUT/paper-study.tgz. Usage: LIMIT=540 CPU_SLOTS=20 bash scripts/gpu_paper_study.sh
+# stopped when started again) and packs the study folder without checkpoints into
+# $OUT/paper-study.tgz; then, anywhere: `python -m train.study report paper --root DIR`.
+# Usage: LIMIT=540 CPU_SLOTS=20 bash scripts/gpu_paper_study.sh
 set -uo pipefail
 export PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 export XLA_FLAGS="--xla_cpu_multi_thread_eigen=false"  # many one-robot CPU runs side by side: one thread each
@@ -13,6 +14,5 @@ device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1) x $(nvidi
 { echo "command: $cmd"; echo "device: $device, $(nproc) CPU cores, date: $(date -u +%FT%TZ)"; } | tee "$log"
 timeout -s INT "${LIMIT:-540}" $cmd 2>&1 | tee -a "$log"
 python3 -m train.study status paper --root "$root" --runs 2>&1 | tee -a "$log"
-python3 -m train.study report paper --root "$root" 2>&1 | tee -a "$log"
 cp "$log" "$root/paper/"
 tar czf "$OUT/paper-study.tgz" --exclude=checkpoints -C "$root" paper
