@@ -86,3 +86,26 @@ def test_hardest_scene_pins_every_parameter_at_its_hard_end():
   assert (s.tread, s.riser, s.steps, s.sampler) == ((0.4, 0.4), (0.22, 0.22), (7, 7), "uniform")
   with pytest.raises(ConfigError, match="stair tasks only"):
     scene_config(load_config("nav"), "hardest")
+
+
+def test_held_out_scenes_pin_their_staircase_and_bad_ones_are_named():
+  from train.evaluate import scene_config, suite_scenes
+  cfg = load_config("asc-inc-cog", ["evaluation.held_out=[{name: low, tread: 0.5, riser: 0.12, steps: 2}]"])
+  s = scene_config(cfg, "held-out/low").scene
+  assert (s.tread, s.riser, s.steps, s.sampler) == ((0.5, 0.5), (0.12, 0.12), (2, 2), "uniform")
+  assert suite_scenes(cfg) == ["hardest", "uniform", "held-out/low"] and suite_scenes(load_config("nav")) == ["uniform"]
+  with pytest.raises(ConfigError, match="names \\['low'\\]"):
+    scene_config(cfg, "held-out/high")
+  with pytest.raises(ConfigError, match=r"evaluation.held_out\[0\].steps: must be in \[1, 7\]"):
+    load_config("asc-inc-cog", ["evaluation.held_out=[{name: x, tread: 0.5, riser: 0.12, steps: 9}]"])
+  with pytest.raises(ConfigError, match="names repeat"):
+    load_config("asc-inc-cog", ["evaluation.held_out=[{name: x, tread: 0.5, riser: 0.1, steps: 2}, "
+                                "{name: x, tread: 0.4, riser: 0.1, steps: 2}]"])
+  with pytest.raises(ConfigError, match="need a stair task"):
+    load_config("nav", ["evaluation.held_out=[{name: x, tread: 0.5, riser: 0.1, steps: 2}]"])
+
+
+def test_a_recorded_config_from_before_the_evaluation_section_loads_without_held_out_scenes():
+  raw = load_config("asc-inc-cog").to_dict()
+  del raw["evaluation"]
+  assert from_dict(raw).evaluation.held_out == ()

@@ -17,12 +17,16 @@ from train import evaluate, run
 from train.checkpoints import RunCheckpoints
 
 
+HELD_OUT = "middle"  # the fixture's one held-out staircase
+
+
 @pytest.fixture(scope="module")
 def ppo_run(tmp_path_factory):
   root = tmp_path_factory.mktemp("runs")
   out, database = str(root / "ppo"), str(root / "db.sqlite")
   rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", out,
-                 "--db", database, "--probe-every", "2048", *TINY])
+                 "--db", database, "--probe-every", "2048", "--milestones", "1024", *TINY,
+                 "--set", f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"])
   assert rc == 0
   return out, database
 
@@ -199,6 +203,31 @@ def test_a_failed_resume_touches_no_record(ppo_run, tmp_path, capsys):
   assert "Traceback" not in err and "Event loop is closed" not in err
   assert open(os.path.join(damaged, "run.json")).read() == before
   assert len(dbmod.ExperimentDB(database).events(run_id(out))) == events
+
+
+def test_the_suite_evaluates_every_scene_at_every_milestone_with_its_own_policy(ppo_run, tmp_path):
+  """--suite --milestones: hardest, uniform and the held-out staircase for the policy exported at
+  1,024 steps and the final one; each report names its budget and policy step; the database gets
+  every trial once per (scene, budget), also when evaluated again."""
+  from train.policy import load_policy_info
+  out, _ = ppo_run
+  run_dir, database = str(tmp_path / "run"), str(tmp_path / "db.sqlite")
+  shutil.copytree(out, run_dir)
+  dbmod.ExperimentDB(database).import_runs(os.path.join(os.path.dirname(out), "db.sqlite"))
+  assert load_policy_info(os.path.join(run_dir, "milestones", "1024"))["step"] == 1024
+  for _ in range(2):
+    assert evaluate.main([run_dir, "--suite", "--milestones", "--trials", "2", "--db", database]) == 0
+  scenes = ["hardest", "uniform", f"held-out/{HELD_OUT}"]
+  for scene in scenes:
+    for budget, step in ((1024, 1024), (None, 2048)):
+      r = json.load(open(evaluate.report_path(run_dir, scene, budget)))
+      assert (r["scene"], r["budget"], r["policy_step"], r["trials"]) == (scene, budget, step, 2)
+  rows = dbmod.ExperimentDB(database).evals(run_id(out))
+  assert sorted({(e["scene"], e["budget"]) for e in rows}, key=str) == sorted(
+      {(s, b) for s in scenes for b in (1024, None)}, key=str)
+  assert len(rows) == len(scenes) * 2 * 2  # evaluated twice: replaced, not duplicated
+  held = json.load(open(evaluate.report_path(run_dir, f"held-out/{HELD_OUT}", None)))["per_trial"]
+  assert max(held["progress"]) - min(held["progress"]) < 1e-6  # one fixed staircase, no random spawn
 
 
 def test_a_killed_run_is_evaluated_from_its_checkpoints(ppo_run, tmp_path, capsys):

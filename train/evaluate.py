@@ -117,15 +117,20 @@ def per_trial_figures(acc) -> dict:
   return {**episode_figures(acc, acc["length"]), "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
 
 
-def run_trials(cfg: TaskConfig, make_act, params, trials: int, eps: float, seed: int, record: bool = False):
-  """Per-trial figures with each trial's final chassis position, and, if record, qpos of trial 0
-  at every step and a C model of its scene; actions make_act(params)(obs)."""
+def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, record: bool = False):
+  """run(params) -> (per-trial figures with each trial's final chassis position, qpos of trial 0 at
+  every step and a C model of its scene if record): compiled once, for every policy of one network."""
   import jax  # noqa: PLC0415
   core, rollout = trial_rollout(cfg, make_act, trials, eps)
-  acc, qpos, scene0 = jax.jit(rollout)(params, trial_keys(trials, seed))
-  # trial 0's scene in a C model, for rendering its recorded qpos
-  render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
-  return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
+  compiled, keys = jax.jit(rollout), trial_keys(trials, seed)
+
+  def run(params):
+    acc, qpos, scene0 = compiled(params, keys)
+    # trial 0's scene in a C model, for rendering its recorded qpos
+    render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
+    return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
+
+  return run
 
 
 def _policy(run_dir: str, checkpoint: str | None, milestone: int | None = None):
@@ -196,38 +201,52 @@ def report_path(run_dir: str, scene: str, budget: int | None) -> str:
   return os.path.join(run_dir, f"eval-{scene.replace('/', '-')}{at}.json")
 
 
-def _evaluate(args, meta: dict, scene: str, budget: int | None, cfg0: TaskConfig) -> str:
-  """Runs one scene with one policy; writes its report and trials; returns the summary line."""
-  import jax  # noqa: PLC0415
+def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: TaskConfig) -> list[str]:
+  """Runs one scene with the policy of each budget (one compilation); writes each report and its
+  trials; returns the summary lines."""
   cfg = scene_config(cfg0, scene)
-  make_act, params, policy_step = _policy(args.run_dir, args.checkpoint, budget)
-  per_trial, qpos, render_model = run_trials(cfg, make_act, params, args.trials, args.eps, args.seed,
-                                             bool(args.video))
-  m = {k: {"mean": float(v.mean()), "std": float(v.std())} for k, v in per_trial.items()}
+  policies = {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}
+  run = trial_runner(cfg, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video))
+  lines = []
+  for budget, (_, params, policy_step) in policies.items():
+    per_trial, qpos, render_model = run(params)
+    out = _write_report(args, meta, scene, budget, policy_step, per_trial)
+    if args.video:
+      from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
+      write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)
+    lines.append(_summary(meta["task"], scene, budget, args.trials, per_trial, out))
+  return lines
+
+
+def _write_report(args, meta: dict, scene: str, budget: int | None, policy_step, per_trial: dict) -> str:
+  """RUN/eval-<scene>[@<budget>].json (or --out) and the database's trial rows; returns the path."""
+  import jax  # noqa: PLC0415
   report = {
       "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": scene, "budget": budget,
       "eps": args.eps if scene in ("incremental", "train") else None,
       "trials": args.trials, "policy_step": policy_step, "checkpoint": args.checkpoint is not None,
-      "metrics": m, "per_trial": {k: v.tolist() for k, v in per_trial.items()},
+      "metrics": {k: {"mean": float(v.mean()), "std": float(v.std())} for k, v in per_trial.items()},
+      "per_trial": {k: v.tolist() for k, v in per_trial.items()},
       "device": str(jax.devices()[0]), "command": "python -m train.evaluate " + " ".join(args.argv),
       "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
   out = args.out or report_path(args.run_dir, scene, budget)
   with open(out, "w") as f:
     json.dump(report, f, indent=1)
   _record_trials(args, meta["run_id"], scene, budget, per_trial)
-  if args.video:
-    from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
-    write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)
+  return out
+
+
+def _summary(task: str, scene: str, budget: int | None, trials: int, per_trial: dict, out: str) -> str:
+  m = {k: (float(v.mean()), float(v.std())) for k, v in per_trial.items()}
   at = "" if budget is None else f" @ {budget:,} steps"
-  return (f"{meta['task']} {scene}{at}: {args.trials} trials, progress {m['progress']['mean']:.3f} +- "
-          f"{m['progress']['std']:.3f}, success {m['success']['mean']:.2f}, COG deviation "
-          f"{m['cog_deviation']['mean']:.3f} +- {m['cog_deviation']['std']:.3f} m, |pitch rate| "
-          f"{m['pitch_rate']['mean']:.3f} rad/s, tip-overs {m['tipped_over']['mean']:.2f}, length "
-          f"{m['length']['mean']:.1f} -> {out}")
+  return (f"{task} {scene}{at}: {trials} trials, progress {m['progress'][0]:.3f} +- {m['progress'][1]:.3f}, "
+          f"success {m['success'][0]:.2f}, COG deviation {m['cog_deviation'][0]:.3f} +- "
+          f"{m['cog_deviation'][1]:.3f} m, |pitch rate| {m['pitch_rate'][0]:.3f} rad/s, tip-overs "
+          f"{m['tipped_over'][0]:.2f}, length {m['length'][0]:.1f} -> {out}")
 
 
-def _jobs(args, cfg: TaskConfig) -> list[tuple[str, int | None]]:
-  """(scene, milestone budget or None for the final policy) pairs to evaluate; ValueError on bad input."""
+def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
+  """(scene, milestone budgets with None for the final policy) to evaluate; ValueError on bad input."""
   scenes = suite_scenes(cfg) if args.suite else [args.scene]
   for scene in scenes:
     scene_config(cfg, scene)  # ConfigError on an unknown scene
@@ -238,7 +257,7 @@ def _jobs(args, cfg: TaskConfig) -> list[tuple[str, int | None]]:
     budgets = [*saved_milestones(args.run_dir), None]
   if len(scenes) * len(budgets) > 1 and (args.out or args.video):
     raise ValueError("--out and --video take one scene and one policy")
-  return [(scene, b) for b in budgets for scene in scenes]
+  return [(scene, budgets) for scene in scenes]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -257,8 +276,9 @@ def main(argv: list[str] | None = None) -> int:
     meta = json.load(f)
   try:
     cfg = from_dict(meta["config"])
-    for scene, budget in _jobs(args, cfg):
-      print(_evaluate(args, meta, scene, budget, cfg), flush=True)
+    for scene, budgets in _jobs(args, cfg):
+      for line in _evaluate(args, meta, scene, budgets, cfg):
+        print(line, flush=True)
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
