@@ -58,6 +58,8 @@ def final_figure(results: StudyResults, group: str, metric: str = "success"):
         err = np.array([[m - est[str(b)][1], est[str(b)][2] - m] for b, m in zip(xs, mid)]).T
         ax.errorbar(xs, mid, yerr=err, marker="o", capsize=3, label=task)
     ax.set_xscale("log" if len(budgets) > 1 else "linear")
+    ax.set_xticks(budgets, [f"{b / 1e6:g}M" if b >= 100_000 else f"{b:,}" for b in budgets], minor=False)
+    ax.minorticks_off()
     ax.set_title(scene, fontsize=10)
     ax.set_xlabel("step budget")
     ax.set_ylim(-0.05, 1.05)

@@ -95,7 +95,8 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
   date = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
   spec = results.spec
   out = [f"# Study `{spec.name}`", "",
-         f"Written by `{command}` on {date}, from `{spec.name}/study.sqlite` and `state.json`. "
+         f"Written by `{command}` on {date}, from `{os.path.basename(os.path.abspath(results.folder))}/study.sqlite` "
+         f"and `state.json`. "
          f"Tasks {', '.join(spec.tasks)}; seeds {', '.join(map(str, spec.seeds))}; "
          f"{spec.eval_trials} trials per evaluation scene.", "",
          "## Runs", "", *attempts_lines(results), "",
@@ -104,10 +105,11 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
          f"{LEVEL:.0%} confidence interval ({REPS:,} resamples, rliable). Pitch rate and tip-overs: mean +- sd over seeds.",
          "", *final_table(results), ""]
   if spec.compare:
+    rows = improvement_table(results)
     out += ["## Probability of improvement", "",
             "P(A > B): the probability that a run of A scores above a run of B (ties count half), "
             f"with its {LEVEL:.0%} bootstrap interval (rliable). 0.5: no difference.", "",
-            *improvement_table(results), ""]
+            *(rows if len(rows) > 2 else ["No pair has finished runs on both sides yet."]), ""]
   out += ["## The paper's Figure 9 side by side", "",
           "The paper evaluated one policy per task with 10 trials on the hardest staircase; here each "
           "seed's policy has its own trials, and the figure is mean +- sd over seeds.", "",

@@ -41,8 +41,10 @@ class StudyResults:
     return [k for k in order if k in seen]
 
   def scenes(self) -> list[str]:
-    """Evaluation scenes, in the order the runs were evaluated on them."""
-    return list(dict.fromkeys(e["scene"] for r in self.runs for e in r.evals))
+    """Evaluation scenes of the finished runs: hardest, uniform, then the others by name."""
+    found = {e["scene"] for r in self.runs for e in r.evals}
+    first = [s for s in ("hardest", "uniform") if s in found]
+    return first + sorted(found - set(first))
 
   def final(self, group: str, task: str, budget: int, scene: str, metric: str) -> np.ndarray:
     """One figure per finished run (seed) of the group: the mean of `metric` over its trials."""
