@@ -16,8 +16,7 @@ LABELS = {"return_mean": "return", "success_rate": "success", "progress_mean": "
 
 
 def _pyplot():
-  import matplotlib  # noqa: PLC0415
-  matplotlib.use("Agg")
+  """pyplot, on the backend matplotlib picks (Agg without a display; inline in a notebook)."""
   import matplotlib.pyplot as plt  # noqa: PLC0415
   return plt
 
