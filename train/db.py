@@ -159,7 +159,8 @@ class ExperimentDB:
                 (status, _now(), json.dumps(final or {}), run_id))
       self._event(c, run_id, STATUS_EVENT[status], step, detail)
 
-  def log_evals(self, run_id: str, trials: list[dict[str, Any]], replace: tuple[str, int | None] | None = None) -> None:
+  def log_evals(self, run_id: str, trials: list[dict[str, Any]],
+                replace: tuple[str, int | None] | None = None) -> None:
     """Adds one row per trial; replace=(scene, budget) first drops that scene's earlier rows."""
     with self._conn() as c:
       if replace is not None:
@@ -225,7 +226,8 @@ class ExperimentDB:
 
   def evals(self, run_id: str) -> list[dict[str, Any]]:
     with self._conn() as c:
-      return [dict(r) for r in c.execute("SELECT * FROM evals WHERE run_id=? ORDER BY budget, scene, trial", (run_id,))]
+      return [dict(r) for r in c.execute("SELECT * FROM evals WHERE run_id=? ORDER BY budget, scene, trial",
+                                         (run_id,))]
 
 
 class NullDB:

@@ -158,7 +158,8 @@ def saved_milestones(run_dir: str) -> list[int]:
   return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []
 
 
-def _record_trials(args: argparse.Namespace, run_id: str, scene: str, budget: int | None, per_trial: dict) -> None:
+def _record_trials(args: argparse.Namespace, run_id: str, scene: str, budget: int | None,
+                   per_trial: dict) -> None:
   """One database row per trial, where the run is in the database."""
   from train.db import ExperimentDB, default_path  # noqa: PLC0415
   db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(args.run_dir))))

@@ -78,7 +78,8 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   cfg = from_dict(meta["config"])
   return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
                  preset, meta["seed"], tuple(meta["overrides"]), cfg, total, meta["num_envs"], True,
-                 _early_stop_of(meta, cfg), meta.get("probe_every", 0), done, tuple(meta.get("milestones") or ()))
+                 _early_stop_of(meta, cfg), meta.get("probe_every", 0), done,
+                 tuple(meta.get("milestones") or ()))
 
 
 def _early_stop_of(meta: dict, cfg) -> EarlyStop | None:
@@ -153,8 +154,9 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   except ValueError as e:
     raise RunError(str(e))
   probe_every = _probe_every(args.probe_every, early, preset, cfg)
+  milestones = parse_milestones(getattr(args, "milestones", None), steps)
   return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
-                 cfg, steps, num_envs, False, early, probe_every, milestones=parse_milestones(getattr(args, "milestones", None), steps))
+                 cfg, steps, num_envs, False, early, probe_every, milestones=milestones)
 
 
 def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:

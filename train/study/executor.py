@@ -101,7 +101,7 @@ class StudyRunner:
     train = not (last and last.get("phase") == "evaluate" and has_run)  # training finished: evaluate again only
     record["status"] = "running"
     record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
-    eval_args = ["--suite", "--trials", str(self.spec.eval_trials), *(["--milestones"] if cell.milestones else [])]
+    eval_args = ["--suite", "--trials", str(self.spec.eval_trials)] + (["--milestones"] if cell.milestones else [])
     backend = cell.backend if cell.backend in self.backends else self.backends[0]
     return self.client.submit(run_cell, cell.train_args(), eval_args, resume, train, self.commands,
                               key=f"{cid}/attempt-{len(record['attempts'])}", pure=False, resources={backend: 1})

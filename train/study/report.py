@@ -16,7 +16,8 @@ from train.study.statistics import LEVEL, REPS, improvement, iqm_intervals
 
 REPORT = "report.md"
 FINAL_COLUMNS = (("success", "hardest"), ("progress", "hardest"), ("success", "uniform"))
-IMPROVEMENT_METRICS = (("success", "hardest"), ("progress", "hardest"), ("success", "uniform"), ("progress", "uniform"))
+IMPROVEMENT_METRICS = (("success", "hardest"), ("progress", "hardest"), ("success", "uniform"),
+                       ("progress", "uniform"))
 
 
 def _ci(est: tuple[float, float, float] | None) -> str:
@@ -48,8 +49,7 @@ def improvement_table(results: StudyResults) -> list[str]:
   """P(A > B) [95 % CI] for every compare pair, group and budget, per metric and scene."""
   lines = ["| group | budget | A | B | " + " | ".join(f"P(A > B), {m} {s}" for m, s in IMPROVEMENT_METRICS) + " |",
            "|---" * (4 + len(IMPROVEMENT_METRICS)) + "|"]
-  budgets = sorted({(g, b) for g, _, b in results.groups()}, key=lambda k: ([g.name for g in results.spec.groups].index(k[0]), k[1]))
-  for group, budget in budgets:
+  for group, budget in dict.fromkeys((g, b) for g, _, b in results.groups()):
     for a, b in results.spec.compare:
       fig = lambda task, m, s: results.final(group, task, budget, s, m)  # noqa: E731
       est = improvement({f"{m} {s}": (fig(a, m, s), fig(b, m, s)) for m, s in IMPROVEMENT_METRICS})
@@ -61,18 +61,18 @@ def improvement_table(results: StudyResults) -> list[str]:
 
 def paper_table(results: StudyResults) -> list[str]:
   """The paper's Figure 9 (10 trials on the hardest staircase, one policy each) beside this study's
-  hardest-staircase figures: mean +- sd over seeds of each run's 100-trial mean."""
-  paper = FIGURE9
+  hardest-staircase figures: mean +- sd over seeds of each run's mean over its trials."""
   lines = ["| task | source | progress | COG deviation (m) | pitch rate (rad/s) |", "|---|---|---|---|---|"]
   for task in results.spec.tasks:
-    p = paper.get(task, {})
+    p = FIGURE9.get(task, {})
     lines.append(f"| {task} | paper (Figure 9) | {p.get('progress', '')} | {p.get('cog_deviation', '')} | "
                  f"{p.get('pitch_rate', '')} |")
     for group, t, budget in results.groups():
       if t == task:
         fig = lambda m: results.final(group, task, budget, "hardest", m)  # noqa: E731
-        lines.append(f"| {task} | {group} @ {budget:,} ({len(fig('progress'))} seeds) | {_mean_sd(fig('progress'))} | "
-                     f"{_mean_sd(fig('cog_deviation'))} | {_mean_sd(fig('pitch_rate'))} |")
+        source = f"{group} @ {budget:,} ({len(fig('progress'))} seeds)"
+        lines.append(f"| {task} | {source} | {_mean_sd(fig('progress'))} | {_mean_sd(fig('cog_deviation'))} | "
+                     f"{_mean_sd(fig('pitch_rate'))} |")
   return lines
 
 
@@ -80,13 +80,13 @@ def attempts_lines(results: StudyResults) -> list[str]:
   """Runs done / failed / unfinished, retried runs and every failed attempt's reason."""
   state = results.state
   n = {k: sum(1 for c in state.values() if c["status"] == k) for k in ("done", "failed")}
-  lines = [f"- {len(state)} runs: {n['done']} done, {n['failed']} failed, {len(state) - sum(n.values())} not finished; "
-           f"{sum(len(c['attempts']) for c in state.values())} attempts."]
+  unfinished, attempts = len(state) - sum(n.values()), sum(len(c["attempts"]) for c in state.values())
+  lines = [f"- {len(state)} runs: {n['done']} done, {n['failed']} failed, {unfinished} not finished; {attempts} attempts."]
   for cid, c in state.items():
     for i, a in enumerate(c["attempts"], 1):
       if a.get("rc") not in (0, None) or a.get("error"):
-        reason = (a.get("error") or "").strip().splitlines()[-1:] or [""]
-        lines.append(f"- `{cid}` attempt {i} on {a.get('worker') or '?'}: rc {a.get('rc')}, {a.get('phase')}: {reason[0][:160]}")
+        reason = ((a.get("error") or "").strip().splitlines()[-1:] or [""])[0][:160]
+        lines.append(f"- `{cid}` attempt {i} on {a.get('worker') or '?'}: rc {a.get('rc')}, {a.get('phase')}: {reason}")
   return lines
 
 
