@@ -3,6 +3,7 @@ shared filesystem), with a stand-in for train.run (tests/fake_study_run.py): a c
 retried from the checkpoint that came back, a run whose worker is killed is retried, every
 attempt is recorded, and a study started again runs nothing finished."""
 
+import io
 import json
 import os
 import pathlib
@@ -59,7 +60,8 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
   with local_cluster(_workers(tmp_path)) as cluster, Client(cluster) as client:
     killer = threading.Thread(target=_kill_the_worker_running, args=(client, f"{SLOW}/attempt-1"))
     killer.start()
-    counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",)).run()
+    stream = io.StringIO()
+    counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=stream, progress_every=0.5).run()
     killer.join()
     assert counts == {"done": 4, "running": 0, "queued": 0, "failed": 0}
     state = json.load(open(os.path.join(folder, "state.json")))["cells"]
@@ -73,6 +75,10 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
         assert [a["rc"] for a in tries] == [1, 0] and tries[1]["resumed"]
         assert json.load(open(os.path.join(run, "run.json")))["sessions"] == 2
     assert {a["worker"] for c in state.values() for a in c["attempts"] if a.get("worker")} == {"a", "b"}
+    progress = stream.getvalue().splitlines()
+    assert progress[-1].startswith("[study] t: 4 done, 0 running, 0 waiting, 0 to retry, 0 failed")
+    assert len(progress) > 1 + sum(len(c["attempts"]) for c in state.values())  # lines while runs ran, too
+    assert any(" 1 running" in line or " 2 running" in line for line in progress)
     lines = summary(folder, runs=True)
     attempts, retried = sum(len(c["attempts"]) for c in state.values()), sum(len(c["attempts"]) > 1 for c in state.values())
     assert lines[0] == f"study study: 4 runs: 4 done, 0 failed, 0 not finished; {attempts} attempts, {retried} runs retried"

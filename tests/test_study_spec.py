@@ -55,7 +55,7 @@ def test_bad_studies_fail_naming_the_fault(change, words):
 
 def test_the_shipped_studies_validate_and_the_command_lists_their_runs(capsys):
   paper = cells(load_study("paper"))  # a shipped study by name
-  assert len(paper) == 4 * 5 * 2  # PPO's 4 budgets: milestones of one run per task and seed
+  assert len(paper) == 4 * 5 * 3  # SAC with and without early stop; PPO's 4 budgets: milestones of one run
   ppo = [c for c in paper if c.group == "ppo"]
   assert {c.budgets() for c in ppo} == {(250_000, 500_000, 1_000_000, 2_000_000)}
   assert all(c.train_args()[-2:] == ["--milestones", "250000,500000,1000000"] for c in ppo)

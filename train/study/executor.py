@@ -69,11 +69,14 @@ class StudyState:
     return out
 
 
-def _progress(name: str, state: StudyState, t0: float, finished_now: int, stream) -> None:
+def _progress(name: str, state: StudyState, t0: float, finished_now: int, running: int | None, stream) -> None:
+  """One line: runs done / running / waiting for a slot / to retry / failed, elapsed, ETA; running
+  None: not known (every submitted run counts as waiting)."""
   n, elapsed = state.counts(), time.time() - t0
   left = n["running"] + n["queued"]
   eta = f", eta {elapsed / finished_now * left:,.0f} s" if finished_now and left else ""
-  print(f"[study] {name}: {n['done']} done, {n['running']} submitted, {n['queued']} to retry, "
+  busy = min(running or 0, n["running"])
+  print(f"[study] {name}: {n['done']} done, {busy} running, {n['running'] - busy} waiting, {n['queued']} to retry, "
         f"{n['failed']} failed | {elapsed:,.0f} s{eta}", file=stream, flush=True)
 
 
@@ -81,8 +84,10 @@ class StudyRunner:
   """Submits a study's unfinished cells to a Dask client and follows them to the end."""
 
   def __init__(self, spec: StudySpec, folder: str, client, commands=(TRAIN, EVALUATE), stream=sys.stdout,
-               backends: tuple[str, ...] = ("gpu", "cpu")):
-    """backends: the worker kinds the cluster has; a cell whose backend is missing runs on the other."""
+               backends: tuple[str, ...] = ("gpu", "cpu"), progress_every: float = 60.0):
+    """backends: the worker kinds the cluster has; a cell whose backend is missing runs on the other;
+    progress_every: seconds between progress lines while no run finishes."""
+    self.progress_every = progress_every
     self.spec, self.folder, self.client, self.commands, self.stream = spec, folder, client, commands, stream
     self.backends = backends
     self.cells = {c.id: c for c in cells(spec)}
@@ -128,6 +133,16 @@ class StudyRunner:
     record["status"] = "done" if res["rc"] == 0 else "queued" if retry else "failed"
     return retry
 
+  def _running(self) -> int | None:
+    """How many of the cluster's tasks are running now (None if the scheduler cannot say)."""
+    try:
+      return sum(len(keys) for keys in self.client.processing().values())
+    except Exception:  # noqa: BLE001  (a scheduler going away must not stop the study)
+      return None
+
+  def _report(self, t0: float, finished: int) -> None:
+    _progress(self.spec.name, self.state, t0, finished, self._running(), self.stream)
+
   def run(self) -> dict[str, int]:
     """Runs every unfinished cell; returns the final counts of done and failed cells."""
     from distributed import as_completed  # noqa: PLC0415
@@ -137,13 +152,23 @@ class StudyRunner:
     for cid in todo:
       pending.add(self._submit(cid))
     self.state.save()
-    _progress(self.spec.name, self.state, t0, finished, self.stream)
-    for future in pending:
-      cid = future.key.rsplit("/attempt-", 1)[0]
-      if self._settle(cid, future):
-        pending.add(self._submit(cid))
-      else:
-        finished += 1
-      self.state.save()
-      _progress(self.spec.name, self.state, t0, finished, self.stream)
+    self._report(t0, finished)
+    last = time.time()
+    while not pending.is_empty():
+      batch = pending.next_batch(block=False)
+      if not batch:
+        if time.time() - last >= self.progress_every:
+          self._report(t0, finished)
+          last = time.time()
+        time.sleep(0.2)
+        continue
+      for future in batch:
+        cid = future.key.rsplit("/attempt-", 1)[0]
+        if self._settle(cid, future):
+          pending.add(self._submit(cid))
+        else:
+          finished += 1
+        self.state.save()
+      self._report(t0, finished)
+      last = time.time()
     return self.state.counts()
