@@ -209,6 +209,17 @@ class ExperimentDB:
         r["status"] = "crashed"
     return rows
 
+  def summaries(self) -> list[dict[str, Any]]:
+    """Every run (as runs()) with its latest training statistics: step, steps_per_s, eps,
+    return_mean, success_rate (one query, for run lists)."""
+    latest = ("SELECT s.run_id, s.step, s.steps_per_s, s.eps, s.return_mean, s.success_rate FROM stats s "
+              "JOIN (SELECT run_id, MAX(rowid) AS last FROM stats WHERE source='train' GROUP BY run_id) m "
+              "ON s.rowid = m.last")
+    with self._conn() as c:
+      rows = {r["run_id"]: dict(r) for r in c.execute(latest)}
+    empty = {"step": None, "steps_per_s": None, "eps": None, "return_mean": None, "success_rate": None}
+    return [{**r, **{k: v for k, v in rows.get(r["run_id"], empty).items() if k != "run_id"}} for r in self.runs()]
+
   def run(self, run_id: str) -> dict[str, Any]:
     for r in self.runs():
       if r["run_id"] == run_id:

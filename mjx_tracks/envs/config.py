@@ -31,13 +31,17 @@ def config_dir():
 
 
 class ConfigError(ValueError):
-  """A configuration key, type or value is wrong; the message names it."""
+  """A configuration key, type or value is wrong; the message names it, and `key` holds it where known."""
+
+  def __init__(self, message: str, key: str | None = None):
+    super().__init__(message)
+    self.key = key
 
 
 def require(cond: bool, key: str, msg: str) -> None:
   """Raises ConfigError("KEY: MSG") unless cond."""
   if not cond:
-    raise ConfigError(f"{key}: {msg}")
+    raise ConfigError(f"{key}: {msg}", key)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -336,7 +340,7 @@ def default_config(overrides: typing.Sequence[str] = ()) -> TaskConfig:
 def load_config(task: str, overrides: typing.Sequence[str] = ()) -> TaskConfig:
   """configs/defaults.yaml <- configs/<task>.yaml <- overrides, validated."""
   if task not in available_tasks():
-    raise ConfigError(f"unknown task {task!r}; available: {', '.join(available_tasks())}")
+    raise ConfigError(f"unknown task {task!r}; available: {', '.join(available_tasks())}", "task")
   raw = _merge({"task": task, **_read_yaml(DEFAULTS)}, _read_yaml(task))
   for item in overrides:
     raw = apply_override(raw, item)

@@ -1,0 +1,38 @@
+"""/api/tasks and /api/validate: the tasks, and a configuration checked by the loader the command
+line uses (configs/defaults.yaml <- the task's YAML <- overrides); errors name their field."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Depends
+from fastapi.responses import JSONResponse
+from pydantic import BaseModel
+
+from mjx_tracks.envs.config import ConfigError, available_tasks, load_config
+from train.server.auth import check_token
+
+router = APIRouter(prefix="/api", tags=["configuration"], dependencies=[Depends(check_token)])
+
+
+class ConfigRequest(BaseModel):
+  task: str
+  overrides: list[str] = []  # dotted KEY=VALUE, as `train.run --set`
+
+
+def config_error(e: ConfigError) -> JSONResponse:
+  """HTTP 422 in FastAPI's own shape, its `loc` naming the configuration key."""
+  loc = ["body", "task"] if e.key == "task" else ["body", "overrides", e.key or ""]
+  return JSONResponse(status_code=422, content={"detail": [{"loc": loc, "msg": str(e), "type": "config"}]})
+
+
+@router.get("/tasks")
+def tasks() -> list[str]:
+  return available_tasks()
+
+
+@router.post("/validate")
+def validate(body: ConfigRequest):
+  """The whole configuration the task and overrides give, or 422 naming the faulty key."""
+  try:
+    return {"task": body.task, "config": load_config(body.task, tuple(body.overrides)).to_dict()}
+  except ConfigError as e:
+    return config_error(e)

@@ -1,0 +1,105 @@
+"""/api/runs: every run of the database with its latest figures, one run's configuration, events,
+statistics and evaluations, and its exported policy as a zip."""
+
+from __future__ import annotations
+
+import datetime
+import io
+import json
+import os
+import zipfile
+
+from fastapi import APIRouter, Depends, HTTPException, Request
+from fastapi.responses import StreamingResponse
+
+from train.db import ExperimentDB
+from train.server.auth import check_token
+
+router = APIRouter(prefix="/api/runs", tags=["runs"], dependencies=[Depends(check_token)])
+LIST_FIELDS = ("run_id", "status", "task", "algo", "preset", "seed", "total_steps", "step", "steps_per_s",
+               "return_mean", "success_rate", "eps", "started", "ended", "out_dir")
+
+
+def _db(request: Request) -> ExperimentDB:
+  return ExperimentDB(request.app.state.settings.db)
+
+
+def _duration_s(started: str | None, ended: str | None) -> float | None:
+  """Seconds from start to end (or to now, for a run still going)."""
+  if not started:
+    return None
+  t0 = datetime.datetime.fromisoformat(started)
+  t1 = datetime.datetime.fromisoformat(ended) if ended else datetime.datetime.now(datetime.timezone.utc)
+  return (t1 - t0).total_seconds()
+
+
+def _run_or_404(db: ExperimentDB, run_id: str) -> dict:
+  try:
+    return db.run(run_id)
+  except KeyError:
+    raise HTTPException(status_code=404, detail=f"no run {run_id!r}") from None
+
+
+@router.get("")
+def list_runs(request: Request) -> list[dict]:
+  """Every run: status, task, algorithm, seed, latest step, steps/s, return, success, eps, times."""
+  return [{**{k: r.get(k) for k in LIST_FIELDS}, "duration_s": _duration_s(r["started"], r["ended"])}
+          for r in _db(request).summaries()]
+
+
+@router.get("/{run_id}")
+def get_run(run_id: str, request: Request) -> dict:
+  """One run: its record, configuration and events."""
+  db = _db(request)
+  run = _run_or_404(db, run_id)
+  config = json.loads(run.pop("config_json") or "{}")
+  final = json.loads(run.pop("final_json") or "{}")
+  return {**run, "config": config, "final": final, "events": db.events(run_id),
+          "duration_s": _duration_s(run["started"], run["ended"])}
+
+
+@router.get("/{run_id}/stats")
+def get_stats(run_id: str, request: Request, source: str | None = None) -> list[dict]:
+  """Its statistics rows (source: train | eval | hardest; all when not given), by step."""
+  db = _db(request)
+  _run_or_404(db, run_id)
+  rows = db.stats(run_id)
+  for r in rows:
+    r.pop("metrics_json", None)
+  return [r for r in rows if source is None or r["source"] == source]
+
+
+@router.get("/{run_id}/evals")
+def get_evals(run_id: str, request: Request) -> list[dict]:
+  """Its evaluations, one entry per (scene, budget): the mean of each figure and every trial."""
+  db = _db(request)
+  _run_or_404(db, run_id)
+  groups: dict[tuple, list[dict]] = {}
+  for e in db.evals(run_id):
+    groups.setdefault((e["scene"], e["budget"]), []).append(e)
+  figures = ("progress", "success", "cog_deviation", "pitch_rate", "tipped_over", "length")
+  return [{"scene": scene, "budget": budget, "trials": len(rows),
+           "mean": {k: sum(r[k] for r in rows) / len(rows) for k in figures},
+           "per_trial": [{k: r[k] for k in ("trial", *figures)} for r in rows]}
+          for (scene, budget), rows in groups.items()]
+
+
+@router.get("/{run_id}/policy")
+def download_policy(run_id: str, request: Request) -> StreamingResponse:
+  """The exported policy (RUN/policy/) as a zip; 403 if the run lies outside the runs folder."""
+  run = _run_or_404(_db(request), run_id)
+  try:
+    folder = request.app.state.settings.inside_runs(os.path.join(run["out_dir"], "policy"))
+  except ValueError as e:
+    raise HTTPException(status_code=403, detail=str(e)) from None
+  if not os.path.isdir(folder):
+    raise HTTPException(status_code=404, detail=f"run {run_id} has no exported policy yet")
+  buf = io.BytesIO()
+  with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+    for root, _, files in os.walk(folder):
+      for name in files:
+        path = os.path.join(root, name)
+        z.write(path, os.path.relpath(path, os.path.dirname(folder)))
+  buf.seek(0)
+  return StreamingResponse(buf, media_type="application/zip",
+                           headers={"Content-Disposition": f'attachment; filename="{run_id}-policy.zip"'})
