@@ -3,11 +3,12 @@ folder with a checkpoint every 100 steps (0.1 s each) and records the run and on
 checkpoint in its database; `evaluate RUN --suite --trials N [--milestones]` records N trials per
 scene of fake_scores() and writes eval-hardest.json. FAKE_CRASH_SEED: that seed's first session
 exits 1 after its first checkpoint; FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
-kill its worker)."""
+kill its worker); SIGTERM ends a session like train.run's: run 'interrupted', exit 143."""
 
 import argparse
 import json
 import os
+import signal
 import sys
 import time
 
@@ -40,6 +41,12 @@ def train(argv: list[str]) -> int:
   meta["sessions"] += 1
   db = ExperimentDB(a.db)
   db.start(meta["run_id"], meta["task"], "ppo", "cpu", meta["seed"], {}, out, meta["steps"])
+
+  def interrupted(*_):
+    db.finish(meta["run_id"], "interrupted", {})
+    sys.exit(143)
+
+  signal.signal(signal.SIGTERM, interrupted)
   os.makedirs(os.path.join(out, "checkpoints"), exist_ok=True)
   step = max([int(d) for d in os.listdir(os.path.join(out, "checkpoints"))], default=0)
   json.dump(meta, open(meta_path, "w"))

@@ -47,6 +47,10 @@ CREATE TABLE IF NOT EXISTS evals (
   progress REAL, success INTEGER, cog_deviation REAL, pitch_rate REAL, tipped_over INTEGER,
   length INTEGER, created TEXT, budget INTEGER
 );
+CREATE TABLE IF NOT EXISTS launches (
+  id INTEGER PRIMARY KEY AUTOINCREMENT, kind TEXT NOT NULL, spec_json TEXT NOT NULL, status TEXT NOT NULL,
+  out_dir TEXT, created TEXT NOT NULL, started TEXT, ended TEXT, rc INTEGER, error TEXT
+);
 CREATE TABLE IF NOT EXISTS attempts (
   study TEXT NOT NULL, cell TEXT NOT NULL, attempt INTEGER NOT NULL, run_id TEXT, worker TEXT,
   started REAL, ended REAL, rc INTEGER, phase TEXT, resumed INTEGER, error TEXT,
@@ -179,6 +183,35 @@ class ExperimentDB:
   def attempts(self, study: str) -> list[dict[str, Any]]:
     with self._conn() as c:
       return [dict(r) for r in c.execute("SELECT * FROM attempts WHERE study=? ORDER BY cell, attempt", (study,))]
+
+  def add_launch(self, kind: str, spec: dict, out_dir: str | None) -> int:
+    """Queues a launch (kind: run | resume | evaluate); returns its id."""
+    with self._conn() as c:
+      cur = c.execute("INSERT INTO launches (kind, spec_json, status, out_dir, created) VALUES (?, ?, 'queued', ?, ?)",
+                      (kind, json.dumps(spec), out_dir, _now()))
+      return int(cur.lastrowid)
+
+  def set_launch(self, launch_id: int, **fields) -> None:
+    """Updates a launch's status, started, ended, rc, error or out_dir."""
+    allowed = {"kind", "status", "started", "ended", "rc", "error", "out_dir"}
+    if not fields or not set(fields) <= allowed:
+      raise ValueError(f"launch fields are {sorted(allowed)}, got {sorted(fields)}")
+    with self._conn() as c:
+      c.execute(f"UPDATE launches SET {', '.join(f'{k}=?' for k in fields)} WHERE id=?", (*fields.values(), launch_id))
+
+  def launch(self, launch_id: int) -> dict[str, Any]:
+    for launch in self.launches():
+      if launch["id"] == launch_id:
+        return launch
+    raise KeyError(f"no launch {launch_id} in {self.path}")
+
+  def launches(self, status: str | None = None) -> list[dict[str, Any]]:
+    """Launches, oldest first, with their spec parsed; only those of one status if given."""
+    with self._conn() as c:
+      rows = [dict(r) for r in c.execute("SELECT * FROM launches ORDER BY id")]
+    for r in rows:
+      r["spec"] = json.loads(r.pop("spec_json"))
+    return [r for r in rows if status is None or r["status"] == status]
 
   def import_runs(self, src: str, out_dir: str | None = None) -> list[str]:
     """Copies every run of another database file (e.g. one that came back from a study's worker)

@@ -1,5 +1,6 @@
 """`python -m train.server [--db PATH] [--runs DIR] [--host 127.0.0.1] [--port 8000] [--token T]`:
-serves the API (docs at /docs) with uvicorn. Listening beyond this machine needs a token
+serves the API (docs at /docs) with uvicorn, and runs its launches on a Dask cluster (started here:
+a worker per GPU and CPU slots, or --scheduler). Listening beyond this machine needs a token
 (--token or $MJX_TRACKS_TOKEN); every request must then carry it."""
 
 from __future__ import annotations
@@ -20,6 +21,10 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("--host", default="127.0.0.1")
   p.add_argument("--port", type=int, default=8000)
   p.add_argument("--token", default=os.environ.get(TOKEN_ENV), help=f"access token (default ${TOKEN_ENV})")
+  p.add_argument("--scheduler", metavar="tcp://HOST:8786", help="run launches on an existing Dask cluster")
+  p.add_argument("--gpus", help="local GPUs for launches, e.g. 0,1 (default: all)")
+  p.add_argument("--slots-per-gpu", type=int, default=1)
+  p.add_argument("--cpu-slots", type=int, help="runs at once on the CPU backend (default: 1 without GPUs, else 0)")
   args = p.parse_args(argv)
   try:
     check_bind(args.host, args.token)
@@ -29,8 +34,20 @@ def main(argv: list[str] | None = None) -> int:
   import uvicorn  # noqa: PLC0415
 
   from train.server.app import create_app  # noqa: PLC0415
-  app = create_app(Settings(args.db or default_path(args.runs), args.runs, args.token))
-  uvicorn.run(app, host=args.host, port=args.port, log_level="info")
+  from train.server.launcher import Launcher  # noqa: PLC0415
+  from train.study.cluster import make_client  # noqa: PLC0415
+  settings = Settings(args.db or default_path(args.runs), args.runs, args.token)
+  try:
+    client, kinds = make_client(args.scheduler, args.gpus, args.slots_per_gpu, args.cpu_slots)
+  except (ValueError, OSError) as e:
+    print(f"error: {e}", file=sys.stderr)
+    return 2
+  launcher = Launcher(settings.db, settings.runs_root, client, kinds).start()
+  try:
+    uvicorn.run(create_app(settings, launcher), host=args.host, port=args.port, log_level="info")
+  finally:
+    launcher.stop()
+    client.close()
   return 0
 
 

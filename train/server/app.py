@@ -4,13 +4,15 @@ from __future__ import annotations
 
 from fastapi import FastAPI
 
-from train.server import config_api, runs_api
+from train.server import config_api, launches_api, runs_api
 from train.server.settings import Settings
 
 
-def create_app(settings: Settings) -> FastAPI:
+def create_app(settings: Settings, launcher=None) -> FastAPI:
+  """The app; launcher (train.server.launcher.Launcher, started by the caller) runs its launches."""
   app = FastAPI(title="mjx-tracks", description="Runs, studies and evaluations of mjx-tracks.")
-  app.state.settings = settings
+  app.state.settings, app.state.launcher = settings, launcher
   app.include_router(runs_api.router)
   app.include_router(config_api.router)
+  app.include_router(launches_api.router)
   return app

@@ -33,19 +33,8 @@ def parser() -> argparse.ArgumentParser:
 
 def _client(args):
   """(Dask client, the worker kinds it has)."""
-  from distributed import Client  # noqa: PLC0415
-
-  from train.study.cluster import local_cluster, local_gpus, worker_specs  # noqa: PLC0415
-  if args.scheduler:
-    client = Client(args.scheduler)
-    kinds = {k for w in client.scheduler_info()["workers"].values() for k in w.get("resources", {})}
-    return client, tuple(k for k in ("gpu", "cpu") if k in kinds)
-  gpus = args.gpus.split(",") if args.gpus else local_gpus()
-  cpu = args.cpu_slots if args.cpu_slots is not None else (0 if gpus else 1)
-  if args.slots_per_gpu < 1 or cpu < 0:
-    raise ValueError("--slots-per-gpu must be >= 1 and --cpu-slots >= 0")
-  client = Client(local_cluster(worker_specs(gpus, args.slots_per_gpu, cpu)))
-  return client, tuple(k for k, n in (("gpu", len(gpus)), ("cpu", cpu)) if n)
+  from train.study.cluster import make_client  # noqa: PLC0415
+  return make_client(args.scheduler, args.gpus, args.slots_per_gpu, args.cpu_slots)
 
 
 def main(argv=None) -> int:

@@ -44,3 +44,20 @@ def local_cluster(specs: dict):
   dask.config.set({"distributed.scheduler.allowed-failures": 0, "logging.distributed": "error"})
   return SpecCluster(workers=specs, scheduler={"cls": Scheduler, "options": {"dashboard_address": ":0"}},
                      silence_logs=40)
+
+
+def make_client(scheduler: str | None, gpus: str | None, slots_per_gpu: int, cpu_slots: int | None):
+  """(Dask client, the worker kinds it has): of an existing cluster (its workers declare gpu / cpu
+  resources), or of one started here on the given GPUs (default all) and CPU slots (default 1
+  without GPUs, else 0); ValueError on bad counts."""
+  from distributed import Client  # noqa: PLC0415
+  if scheduler:
+    client = Client(scheduler)
+    kinds = {k for w in client.scheduler_info()["workers"].values() for k in w.get("resources", {})}
+    return client, tuple(k for k in ("gpu", "cpu") if k in kinds)
+  chosen = gpus.split(",") if gpus else local_gpus()
+  cpu = cpu_slots if cpu_slots is not None else (0 if chosen else 1)
+  if slots_per_gpu < 1 or cpu < 0:
+    raise ValueError("--slots-per-gpu must be >= 1 and --cpu-slots >= 0")
+  client = Client(local_cluster(worker_specs(chosen, slots_per_gpu, cpu)))
+  return client, tuple(k for k, n in (("gpu", len(chosen)), ("cpu", cpu)) if n)

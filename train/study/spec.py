@@ -109,7 +109,7 @@ def _check_runs(spec: StudySpec) -> None:
         if g.early_stop:
           parse_early_stop(g.early_stop, cfg)
       except ValueError as e:  # ConfigError included
-        raise ConfigError(f"groups[{i}] ({g.name}) on {task}: {e}") from None
+        raise ConfigError(f"groups[{i}] ({g.name}) on {task}: {e}", getattr(e, "key", None)) from None
 
 
 def study_from_dict(raw: dict) -> StudySpec:

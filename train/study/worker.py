@@ -61,6 +61,19 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
     shutil.rmtree(scratch, ignore_errors=True)
 
 
+def run_in_place(run_args: list[str], eval_args: list[str], out: str, db: str, resume: bool, train: bool = True,
+                 commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
+  """One run on a worker that shares the filesystem (the server's machine): trains into `out`
+  (resuming it if asked; not at all if not train) with its records in `db`, then evaluates;
+  {"rc", "phase", "log_tail", "worker"}."""
+  log = out + ".log"  # beside the run folder (train.run wants a new folder empty): every attempt's output
+  given = ["--resume", out] if resume else [*run_args, "--out", out]
+  phase, rc = "train", _call([sys.executable, *commands[0], *given, "--db", db], log) if train else 0
+  if rc == 0 and eval_args:
+    phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log)
+  return {"rc": rc, "phase": phase, "log_tail": open(log).read()[-2000:], "worker": _worker_name()}
+
+
 def _worker_name() -> str:
   try:
     from distributed import get_worker  # noqa: PLC0415

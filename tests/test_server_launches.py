@@ -1,0 +1,133 @@
+"""Launching through the server: runs queued over the API run on a local Dask cluster (with the
+stand-in runner of tests/fake_study_run.py), never in the server's process; the queue shows them
+to the end; cancel, stop, resume and evaluate; a server restarted while a run ran queues it again
+to resume from its checkpoints."""
+
+import os
+import pathlib
+import time
+
+import pytest
+from distributed import Client, LocalCluster
+from fastapi.testclient import TestClient
+
+from train.db import ExperimentDB
+from train.server.app import create_app
+from train.server.launcher import Launcher
+from train.server.settings import Settings
+
+FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
+COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))
+
+
+@pytest.fixture()
+def cluster():
+  with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, resources={"cpu": 2},
+                    dashboard_address=":0") as c, Client(c) as client:
+    yield client
+
+
+def _server(tmp_path, client):
+  settings = Settings(str(tmp_path / "runs" / "experiments.sqlite"), str(tmp_path / "runs"))
+  launcher = Launcher(settings.db, settings.runs_root, client, ("cpu",), COMMANDS, poll_s=0.1).start()
+  return TestClient(create_app(settings, launcher)), launcher
+
+
+def _wait(client: TestClient, launch_id: int, status: str, timeout_s: float = 60) -> dict:
+  t_end = time.time() + timeout_s
+  while time.time() < t_end:
+    launch = next(l for l in client.get("/api/launches").json() if l["id"] == launch_id)
+    if launch["status"] == status:
+      return launch
+    time.sleep(0.1)
+  raise AssertionError(f"launch {launch_id} never became {status}: {launch}")
+
+
+def test_a_launched_run_trains_elsewhere_is_evaluated_and_shows_in_the_queue(tmp_path, cluster):
+  client, launcher = _server(tmp_path, cluster)
+  try:
+    r = client.post("/api/launches", json={"task": "asc-inc-cog", "steps": 300, "seed": 2, "eval_trials": 4})
+    assert r.status_code == 201
+    done = _wait(client, r.json()["id"], "done")
+    assert done["rc"] == 0 and done["out_dir"].endswith("asc-inc-cog-ppo-s2-L1")
+    (run,) = client.get("/api/runs").json()
+    assert run["status"] == "done" and run["step"] == 300 and run["seed"] == 2
+    assert run["out_dir"] == done["out_dir"]
+    evals = client.get(f"/api/runs/{run['run_id']}/evals").json()
+    assert {e["scene"] for e in evals} == {"hardest", "uniform", "held-out/middle"}  # the stand-in's suite
+    assert (client.post(f"/api/runs/{run['run_id']}/stop").json()["detail"]
+            == f"run {run['run_id']} is done; nothing to stop")
+    assert client.post(f"/api/runs/{run['run_id']}/resume").status_code == 409
+    again = client.post(f"/api/runs/{run['run_id']}/evaluate")
+    assert _wait(client, again.json()["id"], "done")["out_dir"] == done["out_dir"]
+    assert client.delete(f"/api/launches/{again.json()['id']}").json()["detail"].endswith("nothing to cancel")
+  finally:
+    launcher.stop()
+
+
+def test_bad_launches_are_refused_naming_the_field(tmp_path, cluster):
+  client, launcher = _server(tmp_path, cluster)
+  try:
+    r = client.post("/api/launches", json={"task": "asc-inc-cog", "overrides": ["reward.cog_scal=1"]})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "overrides", "reward.cog_scal"]
+    assert client.post("/api/launches", json={"task": "nope"}).status_code == 422
+    assert client.post("/api/launches", json={"task": "asc-inc-cog", "preset": "huge"}).status_code == 422
+    assert client.delete("/api/launches/99").status_code == 404
+    assert client.post("/api/runs/zzz/stop").status_code == 404
+    assert client.get("/api/launches").json() == []
+  finally:
+    launcher.stop()
+
+
+def test_stop_cancel_and_a_server_restart_that_resumes_the_run(tmp_path, cluster, monkeypatch):
+  monkeypatch.setenv("FAKE_SLOW_SEED", "0")  # 1 s per 100 steps
+  client, launcher = _server(tmp_path, cluster)
+  first = client.post("/api/launches", json={"task": "asc-inc-cog", "steps": 3000, "seed": 0}).json()["id"]
+  queued = client.post("/api/launches", json={"task": "asc-uni-cog", "steps": 3000, "seed": 0}).json()["id"]
+  db = ExperimentDB(str(tmp_path / "runs" / "experiments.sqlite"))
+  t_end = time.time() + 60
+  while not [r for r in db.runs() if r["task"] == "asc-inc-cog" and r["status"] == "running"]:
+    assert time.time() < t_end
+    time.sleep(0.1)
+  assert client.delete(f"/api/launches/{queued}").status_code == 200  # cancelled, whether it started or not
+  _wait(client, queued, "cancelled")
+  launcher.stop()  # the server stops while its run goes on (the run's process is the cluster's)
+  time.sleep(1.5)
+  client, launcher = _server(tmp_path, cluster)  # started again: it follows the run that still runs
+  try:
+    (run,) = [r for r in client.get("/api/runs").json() if r["task"] == "asc-inc-cog"]
+    assert run["status"] == "running" and first in launcher.futures
+    assert [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]] == ["started"]
+    assert client.post(f"/api/runs/{run['run_id']}/stop").json()["detail"].endswith("stop requested")
+    stopped = _wait(client, first, "stopped")
+    assert stopped["rc"] == 143 and client.get(f"/api/runs/{run['run_id']}").json()["status"] == "interrupted"
+    assert os.path.isdir(os.path.join(stopped["out_dir"], "checkpoints"))
+    resumed = client.post(f"/api/runs/{run['run_id']}/resume")
+    assert resumed.status_code == 201
+    _wait(client, resumed.json()["id"], "running")
+    t_end = time.time() + 30
+    while not client.post(f"/api/runs/{run['run_id']}/stop").json()["detail"].endswith("stop requested"):
+      assert time.time() < t_end
+      time.sleep(0.1)
+    assert _wait(client, resumed.json()["id"], "stopped")["rc"] == 143
+    events = [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]]
+    assert events == ["started", "interrupted", "resumed", "interrupted"]
+  finally:
+    launcher.stop()
+
+
+def test_a_launch_whose_run_died_with_the_server_is_queued_to_resume(tmp_path, cluster):
+  """What a restart finds when the cluster died with the server: a 'running' launch whose run
+  left a checkpoint and no live process; it is queued again as a resume of that folder."""
+  runs = tmp_path / "runs"
+  out = runs / "asc-inc-cog-ppo-s0-L1"
+  (out / "checkpoints" / "100").mkdir(parents=True)
+  db = ExperimentDB(str(runs / "experiments.sqlite"))
+  lid = db.add_launch("run", {"task": "asc-inc-cog", "steps": 300}, str(out))
+  db.set_launch(lid, status="running")
+  launcher = Launcher(db.path, str(runs), cluster, ("cpu",), COMMANDS, poll_s=3600).start()  # no tick
+  try:
+    launch = db.launch(lid)
+    assert (launch["status"], launch["kind"], launch["out_dir"]) == ("queued", "resume", str(out))
+  finally:
+    launcher.stop()

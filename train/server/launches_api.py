@@ -1,0 +1,106 @@
+"""/api/launches (queue runs, list the queue, cancel) and the run actions stop / resume / evaluate:
+every launch goes to the launcher, which runs it on the Dask cluster."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Depends, HTTPException, Request
+from pydantic import BaseModel
+
+from mjx_tracks.envs.config import ConfigError
+from train.db import ExperimentDB
+from train.server.auth import check_token
+from train.server.config_api import config_error
+from train.server.launcher import cell_of, stop_run_in
+
+router = APIRouter(prefix="/api", tags=["launches"], dependencies=[Depends(check_token)])
+
+
+class LaunchRequest(BaseModel):
+  task: str
+  algo: str = "ppo"
+  preset: str = "cpu"
+  steps: int = 2048
+  seed: int = 0
+  overrides: list[str] = []  # dotted KEY=VALUE, as `train.run --set`
+  early_stop: str = ""
+  eval_trials: int = 100
+  backend: str = "cpu"
+
+
+def _launcher(request: Request):
+  launcher = request.app.state.launcher
+  if launcher is None:
+    raise HTTPException(status_code=503, detail="this server was started without a launcher")
+  return launcher
+
+
+def _db(request: Request) -> ExperimentDB:
+  return ExperimentDB(request.app.state.settings.db)
+
+
+@router.post("/launches", status_code=201)
+def launch(body: LaunchRequest, request: Request):
+  """Queues a run (checked like a study's runs; 422 names the faulty key)."""
+  _launcher(request)
+  spec = body.model_dump()
+  try:
+    cell_of(spec)
+  except ConfigError as e:
+    return config_error(e)
+  return {"id": _db(request).add_launch("run", spec, None), "status": "queued"}
+
+
+@router.get("/launches")
+def launches(request: Request) -> list[dict]:
+  """Every launch, oldest first: queued, running and finished."""
+  return _db(request).launches()
+
+
+@router.delete("/launches/{launch_id}")
+def cancel(launch_id: int, request: Request) -> dict:
+  """Cancels a queued launch or stops a running one; a finished one is left as it is (200)."""
+  try:
+    return {"detail": _launcher(request).cancel(launch_id)}
+  except KeyError:
+    raise HTTPException(status_code=404, detail=f"no launch {launch_id}") from None
+
+
+def _run(request: Request, run_id: str) -> dict:
+  try:
+    return _db(request).run(run_id)
+  except KeyError:
+    raise HTTPException(status_code=404, detail=f"no run {run_id!r}") from None
+
+
+@router.post("/runs/{run_id}/stop")
+def stop(run_id: str, request: Request) -> dict:
+  """SIGTERM to a running run (it checkpoints, exports and ends 'interrupted'); for any other a no-op."""
+  run = _run(request, run_id)
+  if run["status"] != "running":
+    return {"detail": f"run {run_id} is {run['status']}; nothing to stop"}
+  sent = stop_run_in(_db(request), run["out_dir"])
+  return {"detail": f"run {run_id}: stop requested" if sent else f"run {run_id} runs on another host; not stopped"}
+
+
+@router.post("/runs/{run_id}/resume", status_code=201)
+def resume(run_id: str, request: Request):
+  """Queues the run to continue from its last checkpoint (409 while it runs or when it finished)."""
+  _launcher(request)
+  run = _run(request, run_id)
+  if run["status"] in ("running", "done", "stopped_early"):
+    raise HTTPException(status_code=409, detail=f"run {run_id} is {run['status']}; nothing to resume")
+  return {"id": _db(request).add_launch("resume", _spec_of(run), run["out_dir"]), "status": "queued"}
+
+
+@router.post("/runs/{run_id}/evaluate", status_code=201)
+def evaluate(run_id: str, request: Request):
+  """Queues the evaluation suite of the run's exported policy."""
+  _launcher(request)
+  run = _run(request, run_id)
+  return {"id": _db(request).add_launch("evaluate", _spec_of(run), run["out_dir"]), "status": "queued"}
+
+
+def _spec_of(run: dict) -> dict:
+  """A launch spec for an existing run (its task, algorithm, preset, seed, steps)."""
+  return {"task": run["task"], "algo": run["algo"], "preset": run["preset"] or "cpu", "seed": run["seed"] or 0,
+          "steps": run["total_steps"] or 1}
