@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from fastapi import FastAPI
 
-from train.server import config_api, launches_api, runs_api
+from train.server import compare_api, config_api, launches_api, pages, runs_api
 from train.server.settings import Settings
 
 
@@ -15,4 +15,6 @@ def create_app(settings: Settings, launcher=None) -> FastAPI:
   app.include_router(runs_api.router)
   app.include_router(config_api.router)
   app.include_router(launches_api.router)
+  app.include_router(compare_api.router)
+  app.include_router(pages.router)
   return app

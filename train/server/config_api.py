@@ -29,6 +29,16 @@ def tasks() -> list[str]:
   return available_tasks()
 
 
+@router.get("/schema/{task}")
+def task_schema(task: str):
+  """The form's fields: every key by section with its kind, default for this task and note."""
+  from train.server.schema import schema  # noqa: PLC0415
+  try:
+    return schema(task)
+  except ConfigError as e:
+    return config_error(e)
+
+
 @router.post("/validate")
 def validate(body: ConfigRequest):
   """The whole configuration the task and overrides give, or 422 naming the faulty key."""

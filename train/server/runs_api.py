@@ -10,7 +10,7 @@ import os
 import zipfile
 
 from fastapi import APIRouter, Depends, HTTPException, Request
-from fastapi.responses import StreamingResponse
+from fastapi.responses import FileResponse, StreamingResponse
 
 from train.db import ExperimentDB
 from train.server.auth import check_token
@@ -103,3 +103,26 @@ def download_policy(run_id: str, request: Request) -> StreamingResponse:
   buf.seek(0)
   return StreamingResponse(buf, media_type="application/zip",
                            headers={"Content-Disposition": f'attachment; filename="{run_id}-policy.zip"'})
+
+
+@router.get("/{run_id}/videos")
+def list_videos(run_id: str, request: Request) -> list[str]:
+  """The rollout videos (MP4) in the run's folder, e.g. from `train.evaluate --video`."""
+  run = _run_or_404(_db(request), run_id)
+  folder = run["out_dir"]
+  if not os.path.isdir(folder):
+    return []
+  return sorted(f for f in os.listdir(folder) if f.endswith(".mp4"))
+
+
+@router.get("/{run_id}/videos/{name}")
+def get_video(run_id: str, name: str, request: Request) -> FileResponse:
+  """One of them; 403 for any path that leaves the runs folder, 404 for one that is not there."""
+  run = _run_or_404(_db(request), run_id)
+  try:
+    path = request.app.state.settings.inside_runs(os.path.join(run["out_dir"], name))
+  except ValueError as e:
+    raise HTTPException(status_code=403, detail=str(e)) from None
+  if not name.endswith(".mp4") or not os.path.isfile(path):
+    raise HTTPException(status_code=404, detail=f"run {run_id} has no video {name!r}")
+  return FileResponse(path, media_type="video/mp4")

@@ -1,0 +1,37 @@
+"""/api/compare: the evaluations of chosen runs side by side, per scene and budget: the IQM over
+the runs with its stratified bootstrap 95 % interval (as the study report, rliable) and each run's mean."""
+
+from __future__ import annotations
+
+import numpy as np
+from fastapi import APIRouter, Depends, HTTPException, Query, Request
+
+from train.db import ExperimentDB
+from train.server.auth import check_token
+from train.study.statistics import iqm_intervals
+
+router = APIRouter(prefix="/api", tags=["compare"], dependencies=[Depends(check_token)])
+METRICS = ("success", "progress", "pitch_rate", "cog_deviation", "tipped_over")
+
+
+@router.get("/compare")
+def compare(request: Request, run: list[str] = Query(...)) -> list[dict]:
+  """[{scene, budget, runs, per_run: {run: {metric: mean}}, iqm: {metric: [IQM, low, high]}}]."""
+  db = ExperimentDB(request.app.state.settings.db)
+  per: dict[tuple, dict[str, dict]] = {}
+  for run_id in run:
+    try:
+      db.run(run_id)
+    except KeyError:
+      raise HTTPException(status_code=404, detail=f"no run {run_id!r}") from None
+    groups: dict[tuple, list[dict]] = {}
+    for e in db.evals(run_id):
+      groups.setdefault((e["scene"], e["budget"]), []).append(e)
+    for key, rows in groups.items():
+      per.setdefault(key, {})[run_id] = {m: float(np.mean([r[m] for r in rows])) for m in METRICS}
+  out = []
+  for (scene, budget), runs in per.items():
+    est = iqm_intervals({m: np.array([v[m] for v in runs.values()]) for m in METRICS})
+    out.append({"scene": scene, "budget": budget, "runs": len(runs), "per_run": runs,
+                "iqm": {m: list(est[m]) for m in METRICS}})
+  return out
