@@ -22,11 +22,12 @@ const CURVES = {return_mean: "return", progress_mean: "progress", success_rate: 
 function drawCurves(el, series, x) {  // series: [{name, rows}] of statistics rows; x: "step" | "wall_s"
   el.innerHTML = "";
   for (const [key, title] of Object.entries(CURVES)) {
-    const div = document.createElement("div"); div.className = "chart"; el.appendChild(div);
     const traces = series.map(({name, rows}) => {
       const pts = rows.filter((r) => r[key] != null && r[x] != null);
       return {x: pts.map((r) => r[x]), y: pts.map((r) => r[key]), name, mode: "lines+markers", type: "scatter"};
     });
+    if (!traces.some((t) => t.x.length)) continue;  // a figure no row has: no empty chart
+    const div = document.createElement("div"); div.className = "chart"; el.appendChild(div);
     Plotly.react(div, traces, {title: {text: title, font: {size: 13}}, margin: {t: 30, l: 50, r: 10, b: 40},
       xaxis: {title: {text: x === "step" ? "environment steps" : "wall time (s)"}}, showlegend: series.length > 1,
       legend: {font: {size: 9}}, height: 260}, {displayModeBar: false, responsive: true});

@@ -1,0 +1,72 @@
+"""Screenshots of every dashboard page (docs/screenshots/) served over a real experiment database,
+by default the partial GPU study committed in results/studies/paper-ppo-part: the system Chromium
+driven by Playwright, headless. Usage: python scripts/dashboard_screenshots.py [--db PATH] [--out DIR]"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import socket
+import threading
+import time
+
+import uvicorn
+
+from train.server.app import create_app
+from train.server.settings import Settings
+
+
+def serve(db: str) -> tuple[str, uvicorn.Server]:
+  """A server (no launcher) on a free local port; returns its base URL."""
+  with socket.socket() as s:
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+  server = uvicorn.Server(uvicorn.Config(create_app(Settings(db, "results")), host="127.0.0.1", port=port,
+                                         log_level="warning"))
+  threading.Thread(target=server.run, daemon=True).start()
+  while not server.started:
+    time.sleep(0.05)
+  return f"http://127.0.0.1:{port}", server
+
+
+def shoot(base: str, out: str) -> None:
+  from playwright.sync_api import sync_playwright  # noqa: PLC0415
+  with sync_playwright() as p:
+    browser = p.chromium.launch(executable_path=shutil.which("chromium"), headless=True, args=["--no-sandbox"])
+    page = browser.new_page(viewport={"width": 1366, "height": 860})
+    page.goto(f"{base}/")
+    page.wait_for_function("document.querySelectorAll('#rows tr').length > 0")
+    page.screenshot(path=f"{out}/runs.png")
+    ids = page.evaluate("fetch('/api/runs').then(r => r.json()).then(rs => rs.map(r => r.run_id))")
+    page.goto(f"{base}/runs/{ids[0]}")
+    page.wait_for_function("document.querySelectorAll('#evals tr').length > 0 && document.querySelector('.chart')")
+    page.screenshot(path=f"{out}/run.png", full_page=True)
+    page.goto(f"{base}/compare?" + "&".join(f"run={i}" for i in ids))
+    page.wait_for_function("document.querySelectorAll('#evals tr').length > 0")
+    page.screenshot(path=f"{out}/compare.png", full_page=True)
+    page.goto(f"{base}/new")
+    page.wait_for_selector("#f-episode--max_steps")
+    page.fill("#f-episode--max_steps", "0")
+    page.click("#check")
+    page.wait_for_function("document.querySelector('.error[data-for=\"episode.max_steps\"]').textContent")
+    page.screenshot(path=f"{out}/new-experiment.png")
+    page.goto(f"{base}/queue")
+    page.screenshot(path=f"{out}/queue.png")
+    browser.close()
+
+
+def main() -> None:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("--db", default="results/studies/paper-ppo-part/study.sqlite")
+  p.add_argument("--out", default="docs/screenshots")
+  args = p.parse_args()
+  base, server = serve(args.db)
+  try:
+    shoot(base, args.out)
+  finally:
+    server.should_exit = True
+  print(f"screenshots -> {args.out}")
+
+
+if __name__ == "__main__":
+  main()
