@@ -1,7 +1,8 @@
 """The server's launches, run on a Dask cluster by the study executor's worker function
 (`train.study.worker.run_in_place`), never in the server's process: queued launches are submitted,
 finished ones recorded in the database's `launches` table. Launches found running when the server
-starts (it stopped while they ran) are queued again, to resume from their checkpoints."""
+starts (it stopped while they ran) are followed again if their run still runs, else queued again
+to resume from their checkpoints."""
 
 from __future__ import annotations
 
@@ -15,7 +16,6 @@ from train.db import ExperimentDB
 from train.study.spec import Cell, study_from_dict
 from train.study.worker import EVALUATE, TRAIN, run_in_place
 
-KINDS = ("run", "resume", "evaluate")
 STOPPED = 143  # train.run's exit code after SIGTERM (checkpoint written, policy exported)
 
 
@@ -50,11 +50,11 @@ class Launcher:
     """Takes up what was running when the server stopped: a run whose process still runs (on a
     cluster that outlived the server) is followed again; any other is queued again, to resume
     where a checkpoint exists. Then follows the queue in a thread."""
+    from distributed import Future  # noqa: PLC0415
     alive = {os.path.abspath(r["out_dir"]) for r in self.db.runs() if r["status"] == "running"}
     for launch in self.db.launches("running"):
       out = launch["out_dir"] or ""
       if os.path.abspath(out) in alive:
-        from distributed import Future  # noqa: PLC0415
         self.futures[launch["id"]] = Future(f"launch-{launch['id']}", self.client)
         continue
       resumable = launch["kind"] != "evaluate" and os.path.isdir(os.path.join(out, "checkpoints"))
