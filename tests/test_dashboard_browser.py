@@ -84,7 +84,9 @@ def test_a_run_made_from_the_form_reaches_done_and_its_page_draws_its_curves(pag
                          "&& document.querySelector('.chart').data[0].x.length > 0")
   points = page.evaluate("document.querySelector('.chart').data[0].x.length")
   assert points == 3  # the stand-in logs a training row per 100 steps
-  page.wait_for_function("document.querySelectorAll('#evals tr').length == 3")
+  page.wait_for_function("document.querySelectorAll('#evals tr.eval').length == 3")
+  page.click("#evals tr.eval")  # every trial of that evaluation
+  assert page.locator("#trials-0 tr").count() == 4 and page.is_visible("#trials-0")
 
 
 def test_two_runs_compare_side_by_side(page, base_url):
