@@ -131,3 +131,46 @@ def test_a_launch_whose_run_died_with_the_server_is_queued_to_resume(tmp_path, c
     assert (launch["status"], launch["kind"], launch["out_dir"]) == ("queued", "resume", str(out))
   finally:
     launcher.stop()
+
+
+STUDY_YAML = """name: web
+tasks: [asc-inc-cog, asc-uni-cog]
+seeds: [0, 1]
+eval_trials: 4
+groups:
+  - {name: g, algo: ppo, preset: cpu, steps: [200], backend: cpu}
+"""
+
+
+def test_a_study_launched_through_the_server_runs_every_run_and_lists_them(tmp_path, cluster):
+  client, launcher = _server(tmp_path, cluster)
+  try:
+    bad = client.post("/api/studies", json={"yaml": STUDY_YAML, "overrides": ["seeds=[0, 0]"]})
+    assert bad.status_code == 422 and "seeds" in bad.json()["detail"][0]["msg"]
+    assert client.post("/api/studies", json={"yaml": "name: [unclosed"}).status_code == 422
+    r = client.post("/api/studies", json={"yaml": STUDY_YAML})
+    assert r.status_code == 201 and r.json()["folder"].endswith(os.path.join("runs", "studies", "web"))
+    _wait(client, r.json()["id"], "done")
+    (study,) = client.get("/api/studies").json()
+    assert (study["runs"], study["done"], study["failed"]) == (4, 4, 0)
+    runs = client.get("/api/runs").json()  # mirrored from the study's own database
+    assert sorted((x["task"], x["seed"], x["status"]) for x in runs) == [
+        ("asc-inc-cog", 0, "done"), ("asc-inc-cog", 1, "done"), ("asc-uni-cog", 0, "done"), ("asc-uni-cog", 1, "done")]
+    assert os.path.exists(os.path.join(r.json()["folder"], "study.log"))
+  finally:
+    launcher.stop()
+
+
+def test_cancelling_a_study_cancels_its_waiting_runs(tmp_path, cluster, monkeypatch):
+  monkeypatch.setenv("FAKE_SLOW_SEED", "0")
+  client, launcher = _server(tmp_path, cluster)
+  try:
+    slow = STUDY_YAML.replace("steps: [200]", "steps: [300]").replace("seeds: [0, 1]", "seeds: [0]")
+    r = client.post("/api/studies", json={"yaml": slow, "overrides": ["tasks=[asc-inc-cog, asc-uni-cog, des-inc-ang]"]})
+    _wait(client, r.json()["id"], "running")
+    assert client.delete(f"/api/launches/{r.json()['id']}").json()["detail"].endswith("cancelled")
+    launch = _wait(client, r.json()["id"], "cancelled")
+    (study,) = client.get("/api/studies").json()
+    assert study["done"] < 3 and launch["ended"]
+  finally:
+    launcher.stop()

@@ -23,6 +23,21 @@ def _now() -> str:
   return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
 
 
+def study_of(spec: dict):
+  """The study a study launch holds ({"yaml": text, "overrides": [KEY=VALUE]}), validated like
+  `python -m train.study`; ConfigError names the faulty key."""
+  import yaml  # noqa: PLC0415
+
+  from mjx_tracks.envs.config import ConfigError, apply_override  # noqa: PLC0415
+  try:
+    raw = yaml.safe_load(spec.get("yaml") or "") or {}
+  except yaml.YAMLError as e:
+    raise ConfigError(f"the study YAML does not parse: {e}", "yaml") from None
+  for item in spec.get("overrides", []):
+    raw = apply_override(raw, item)
+  return study_from_dict(raw)
+
+
 def cell_of(spec: dict) -> Cell:
   """The run a launch spec describes ({task, algo, preset, steps, seed, overrides, early_stop}),
   checked like a study's; ConfigError names the faulty key."""
@@ -42,7 +57,7 @@ class Launcher:
                commands=(TRAIN, EVALUATE), poll_s: float = 1.0):
     self.db, self.runs_root, self.client = ExperimentDB(db_path), os.path.abspath(runs_root), client
     self.backends, self.commands, self.poll_s = backends, commands, poll_s
-    self.futures: dict[int, object] = {}
+    self.futures: dict[int, object] = {}  # launch id -> a Dask future, or a thread running a study
     self.lock, self.done = threading.Lock(), threading.Event()
     self.thread = threading.Thread(target=self._loop, name="launcher", daemon=True)
 
@@ -57,10 +72,10 @@ class Launcher:
       if os.path.abspath(out) in alive:
         self.futures[launch["id"]] = Future(f"launch-{launch['id']}", self.client)
         continue
-      resumable = launch["kind"] != "evaluate" and os.path.isdir(os.path.join(out, "checkpoints"))
+      resumable = launch["kind"] in ("run", "resume") and os.path.isdir(os.path.join(out, "checkpoints"))
       kind = "resume" if resumable else launch["kind"]
       self.db.set_launch(launch["id"], status="queued", kind=kind,
-                         out_dir=out if resumable or kind == "evaluate" else None,
+                         out_dir=out if resumable or kind in ("evaluate", "study") else None,
                          error=f"queued again ({kind}) after a server restart")
     self.thread.start()
     return self
@@ -75,13 +90,16 @@ class Launcher:
         for launch in self.db.launches("queued"):
           self._submit(launch)
         for lid, future in list(self.futures.items()):
-          if future.done():
+          if (not future.is_alive()) if isinstance(future, threading.Thread) else future.done():
             self._settle(lid, future)
           elif self.db.launch(lid)["status"] == "cancelled":  # its run may have started since the cancel
             stop_run_in(self.db, self.db.launch(lid)["out_dir"])
 
   def _submit(self, launch: dict) -> None:
     spec, kind = launch["spec"], launch["kind"]
+    if kind == "study":
+      self._start_study(launch)
+      return
     cell = cell_of(spec)
     out = launch["out_dir"] or self._new_folder(cell, launch["id"])
     eval_args = ["--suite", "--trials", str(spec.get("eval_trials", 100))]
@@ -90,6 +108,33 @@ class Launcher:
         run_in_place, cell.train_args(), eval_args, out, self.db.path, kind == "resume", kind != "evaluate",
         self.commands, key=f"launch-{launch['id']}", pure=False, resources={backend: 1})
     self.db.set_launch(launch["id"], status="running", started=_now(), out_dir=out)
+
+  def _start_study(self, launch: dict) -> None:
+    """A study launch: the study executor (train.study) on this launcher's cluster, in a thread;
+    its runs' records are mirrored into the server's database. A study started again skips its
+    finished runs."""
+    spec = study_of(launch["spec"])
+    folder = launch["out_dir"] or os.path.join(self.runs_root, "studies", spec.name)
+    os.makedirs(folder, exist_ok=True)
+    outcome: dict = {}
+
+    from train.study.executor import StudyRunner  # noqa: PLC0415
+    log = open(os.path.join(folder, "study.log"), "a")
+    runner = StudyRunner(spec, folder, self.client, self.commands, log, self.backends, mirror_db=self.db.path)
+
+    def run() -> None:
+      try:
+        outcome["counts"] = runner.run()
+      except Exception as e:  # noqa: BLE001  (recorded as the launch's error)
+        outcome["error"] = repr(e)
+      finally:
+        log.close()
+
+    thread = threading.Thread(target=run, name=f"study-{launch['id']}", daemon=True)
+    thread.outcome, thread.runner = outcome, runner
+    self.futures[launch["id"]] = thread
+    self.db.set_launch(launch["id"], status="running", started=_now(), out_dir=folder)
+    thread.start()
 
   def _new_folder(self, cell: Cell, launch_id: int) -> str:
     """RUNS/<task>-<algo>-s<seed>-L<launch>[-N]: a folder no run has used."""
@@ -102,10 +147,15 @@ class Launcher:
 
   def _settle(self, launch_id: int, future) -> None:
     del self.futures[launch_id]
-    try:
-      res = future.result()
-    except Exception as e:  # noqa: BLE001  (cancelled, or its worker died)
-      res = {"rc": None, "log_tail": repr(e)}
+    if isinstance(future, threading.Thread):  # a study
+      counts, error = future.outcome.get("counts") or {}, future.outcome.get("error", "")
+      ok = not error and counts.get("failed", 1) == 0
+      res = {"rc": 0 if ok else 1, "log_tail": error or f"{counts.get('failed')} runs failed"}
+    else:
+      try:
+        res = future.result()
+      except Exception as e:  # noqa: BLE001  (cancelled, or its worker died)
+        res = {"rc": None, "log_tail": repr(e)}
     cancelled = self.db.launch(launch_id)["status"] == "cancelled"
     status = "cancelled" if cancelled else "done" if res["rc"] == 0 else "stopped" if res["rc"] == STOPPED else "failed"
     self.db.set_launch(launch_id, status=status, ended=_now(), rc=res["rc"],
@@ -118,8 +168,11 @@ class Launcher:
       if launch["status"] not in ("queued", "running"):
         return f"launch {launch_id} is {launch['status']}; nothing to cancel"
       self.db.set_launch(launch_id, status="cancelled", ended=_now())
-      if launch_id in self.futures:
-        self.futures[launch_id].cancel()  # still waiting for a slot
+      task = self.futures.get(launch_id)
+      if isinstance(task, threading.Thread):
+        task.runner.cancel.set()  # a study: its queued runs are cancelled
+      elif task is not None:
+        task.cancel()  # still waiting for a slot
         stop_run_in(self.db, launch["out_dir"])
       return f"launch {launch_id} cancelled"
 

@@ -3,6 +3,9 @@ every launch goes to the launcher, which runs it on the Dask cluster."""
 
 from __future__ import annotations
 
+import json
+import os
+
 from fastapi import APIRouter, Depends, HTTPException, Request
 from pydantic import BaseModel
 
@@ -10,7 +13,7 @@ from mjx_tracks.envs.config import ConfigError
 from train.db import ExperimentDB
 from train.server.auth import check_token
 from train.server.config_api import config_error
-from train.server.launcher import cell_of, stop_run_in
+from train.server.launcher import cell_of, stop_run_in, study_of
 
 router = APIRouter(prefix="/api", tags=["launches"], dependencies=[Depends(check_token)])
 
@@ -48,6 +51,39 @@ def launch(body: LaunchRequest, request: Request):
   except ConfigError as e:
     return config_error(e)
   return {"id": _db(request).add_launch("run", spec, None), "status": "queued"}
+
+
+class StudyRequest(BaseModel):
+  yaml: str  # a study file's text, as `python -m train.study FILE` takes it
+  overrides: list[str] = []  # top-level KEY=VALUE, as `--set`
+
+
+@router.post("/studies", status_code=201)
+def launch_study(body: StudyRequest, request: Request):
+  """Queues a study (validated as `python -m train.study` does; 422 names the faulty key); its runs
+  go through the study executor on the launcher's cluster and show up in the run list."""
+  _launcher(request)
+  spec = body.model_dump()
+  try:
+    study = study_of(spec)
+  except ConfigError as e:
+    return config_error(e)
+  folder = os.path.join(os.path.abspath(request.app.state.settings.runs_root), "studies", study.name)
+  return {"id": _db(request).add_launch("study", {**spec, "name": study.name}, folder), "status": "queued",
+          "folder": folder}
+
+
+@router.get("/studies")
+def studies(request: Request) -> list[dict]:
+  """Every study launch with its runs' counts (done / failed / not finished) from its state.json."""
+  out = []
+  for launch in _db(request).launches():
+    if launch["kind"] == "study":
+      state_path = os.path.join(launch["out_dir"] or "", "state.json")
+      cells = json.load(open(state_path))["cells"] if os.path.exists(state_path) else {}
+      counts = {k: sum(1 for c in cells.values() if c["status"] == k) for k in ("done", "failed")}
+      out.append({**launch, "runs": len(cells), **counts})
+  return out
 
 
 @router.get("/launches")

@@ -11,6 +11,7 @@ import json
 import os
 import shutil
 import sys
+import threading
 import time
 
 from train.db import ExperimentDB
@@ -84,10 +85,13 @@ class StudyRunner:
   """Submits a study's unfinished cells to a Dask client and follows them to the end."""
 
   def __init__(self, spec: StudySpec, folder: str, client, commands=(TRAIN, EVALUATE), stream=sys.stdout,
-               backends: tuple[str, ...] = ("gpu", "cpu"), progress_every: float = 60.0):
+               backends: tuple[str, ...] = ("gpu", "cpu"), progress_every: float = 60.0,
+               mirror_db: str | None = None):
     """backends: the worker kinds the cluster has; a cell whose backend is missing runs on the other;
-    progress_every: seconds between progress lines while no run finishes."""
-    self.progress_every = progress_every
+    progress_every: seconds between progress lines while no run finishes; mirror_db: another
+    database that gets every run's records too (the server's)."""
+    self.progress_every, self.mirror_db = progress_every, mirror_db
+    self.cancel = threading.Event()  # set from another thread: the study's tasks are cancelled, run() returns
     self.spec, self.folder, self.client, self.commands, self.stream = spec, folder, client, commands, stream
     self.backends = backends
     self.cells = {c.id: c for c in cells(spec)}
@@ -125,6 +129,8 @@ class StudyRunner:
       unpack(res["tar"], local)
       if os.path.exists(os.path.join(local, RUN_DB)):
         db.import_runs(os.path.join(local, RUN_DB), local)
+        if self.mirror_db:
+          ExperimentDB(self.mirror_db).import_runs(os.path.join(local, RUN_DB), local)
     attempt.update(ended=time.time(), rc=res["rc"], phase=res["phase"], worker=res["worker"],
                    error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
     db.log_attempt(self.spec.name, cid, len(record["attempts"]), attempt, _run_id(local))
@@ -148,13 +154,17 @@ class StudyRunner:
     from distributed import as_completed  # noqa: PLC0415
     t0, finished = time.time(), 0
     todo = [cid for cid, c in self.state.cells.items() if c["status"] != "done"]
-    pending = as_completed()
+    pending, submitted = as_completed(), []
     for cid in todo:
-      pending.add(self._submit(cid))
+      submitted.append(self._submit(cid))
+      pending.add(submitted[-1])
     self.state.save()
     self._report(t0, finished)
     last = time.time()
     while not pending.is_empty():
+      if self.cancel.is_set():
+        self.client.cancel([f for f in submitted if not f.done()])
+        break
       batch = pending.next_batch(block=False)
       if not batch:
         if time.time() - last >= self.progress_every:
@@ -165,7 +175,8 @@ class StudyRunner:
       for future in batch:
         cid = future.key.rsplit("/attempt-", 1)[0]
         if self._settle(cid, future):
-          pending.add(self._submit(cid))
+          submitted.append(self._submit(cid))
+          pending.add(submitted[-1])
         else:
           finished += 1
         self.state.save()
