@@ -152,7 +152,7 @@ def test_a_study_launched_through_the_server_runs_every_run_and_lists_them(tmp_p
     assert r.status_code == 201 and r.json()["folder"].endswith(os.path.join("runs", "studies", "web"))
     _wait(client, r.json()["id"], "done")
     (study,) = client.get("/api/studies").json()
-    assert (study["runs"], study["done"], study["failed"]) == (4, 4, 0)
+    assert (study["runs"], study["done"], study["failed"], len(study["run_ids"])) == (4, 4, 0, 4)
     runs = client.get("/api/runs").json()  # mirrored from the study's own database
     assert sorted((x["task"], x["seed"], x["status"]) for x in runs) == [
         ("asc-inc-cog", 0, "done"), ("asc-inc-cog", 1, "done"), ("asc-uni-cog", 0, "done"), ("asc-uni-cog", 1, "done")]

@@ -82,7 +82,9 @@ def studies(request: Request) -> list[dict]:
       state_path = os.path.join(launch["out_dir"] or "", "state.json")
       cells = json.load(open(state_path))["cells"] if os.path.exists(state_path) else {}
       counts = {k: sum(1 for c in cells.values() if c["status"] == k) for k in ("done", "failed")}
-      out.append({**launch, "runs": len(cells), **counts})
+      db_path = os.path.join(launch["out_dir"] or "", "study.sqlite")
+      run_ids = [r["run_id"] for r in ExperimentDB(db_path).runs()] if os.path.exists(db_path) else []
+      out.append({**launch, "runs": len(cells), **counts, "run_ids": run_ids})
   return out
 
 
