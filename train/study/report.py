@@ -81,7 +81,8 @@ def attempts_lines(results: StudyResults) -> list[str]:
   state = results.state
   n = {k: sum(1 for c in state.values() if c["status"] == k) for k in ("done", "failed")}
   unfinished, attempts = len(state) - sum(n.values()), sum(len(c["attempts"]) for c in state.values())
-  lines = [f"- {len(state)} runs: {n['done']} done, {n['failed']} failed, {unfinished} not finished; {attempts} attempts."]
+  lines = [f"- {len(state)} runs: {n['done']} done, {n['failed']} failed, {unfinished} not finished; "
+           f"{attempts} attempts."]
   for cid, c in state.items():
     for i, a in enumerate(c["attempts"], 1):
       if a.get("rc") not in (0, None) or a.get("error"):
@@ -102,7 +103,8 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
          "## Runs", "", *attempts_lines(results), "",
          "## Final metrics", "",
          f"Interquartile mean over seeds of each run's mean over its trials, with a stratified bootstrap "
-         f"{LEVEL:.0%} confidence interval ({REPS:,} resamples, rliable). Pitch rate and tip-overs: mean +- sd over seeds.",
+         f"{LEVEL:.0%} confidence interval ({REPS:,} resamples, rliable). Pitch rate and tip-overs: "
+         "mean +- sd over seeds.",
          "", *final_table(results), ""]
   if spec.compare:
     rows = improvement_table(results)
