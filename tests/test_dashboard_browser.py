@@ -106,3 +106,19 @@ def test_an_invalid_value_shows_the_error_at_its_field(page, base_url):
   page.click("#check")
   page.wait_for_function("document.querySelector('.error[data-for=\"episode.max_steps\"]').textContent.length > 0")
   assert "must be in [1, 100000]" in page.text_content('.error[data-for="episode.max_steps"]')
+
+
+def test_a_study_launched_from_the_form_shows_its_groups_with_bands(page, base_url):
+  page.goto(f"{base_url}/new")
+  page.wait_for_selector("#f-episode--max_steps")
+  page.fill("#steps", "200")
+  page.fill("#seeds", "0, 1")
+  page.fill("#eval_trials", "4")
+  page.click("#study")
+  page.wait_for_function("document.getElementById('result').textContent.startsWith('study queued')")
+  page.goto(f"{base_url}/")
+  page.wait_for_function("document.querySelector('#studies a') !== null", timeout=60_000)
+  page.click("#studies a")  # its groups
+  page.wait_for_function("document.querySelector('.chart') && document.querySelector('.chart').data "
+                         "&& document.querySelector('.chart').data.length == 2")  # the band and the mean
+  assert "IQM over seeds" in page.text_content("#groups")

@@ -8,7 +8,9 @@ import pathlib
 import time
 
 import pytest
+import scipy.stats
 from distributed import Client, LocalCluster
+from fake_study_run import fake_success
 from fastapi.testclient import TestClient
 
 from train.db import ExperimentDB
@@ -157,6 +159,16 @@ def test_a_study_launched_through_the_server_runs_every_run_and_lists_them(tmp_p
     assert sorted((x["task"], x["seed"], x["status"]) for x in runs) == [
         ("asc-inc-cog", 0, "done"), ("asc-inc-cog", 1, "done"), ("asc-uni-cog", 0, "done"), ("asc-uni-cog", 1, "done")]
     assert os.path.exists(os.path.join(r.json()["folder"], "study.log"))
+    groups = client.get(f"/api/studies/{r.json()['id']}/groups").json()
+    success = [c for c in groups["curves"] if c["metric"] == "success_rate"]
+    assert sorted((c["group"], c["task"], c["runs"]) for c in success) == [("g", "asc-inc-cog", 2), ("g", "asc-uni-cog", 2)]
+    for c in success:  # the stand-in logs success = step / 1000 for every seed: a band of width 0
+      assert c["mean"] == pytest.approx([x / 1000 for x in c["x"]]) and c["low"] == pytest.approx(c["high"])
+    (inc,) = [f for f in groups["final"] if f["task"] == "asc-inc-cog"]
+    per_seed = [sum(fake_success("asc-inc-cog", seed, 200, i) for i in range(4)) / 4 for seed in (0, 1)]
+    iqm = scipy.stats.trim_mean(per_seed, 0.25)
+    assert inc["iqm"]["success hardest"][0] == pytest.approx(iqm)
+    assert client.get("/api/studies/99/groups").status_code == 404
   finally:
     launcher.stop()
 

@@ -142,3 +142,34 @@ def _spec_of(run: dict) -> dict:
   """A launch spec for an existing run (its task, algorithm, preset, seed, steps)."""
   return {"task": run["task"], "algo": run["algo"], "preset": run["preset"] or "cpu", "seed": run["seed"] or 0,
           "steps": run["total_steps"] or 1}
+
+
+@router.get("/studies/{launch_id}/groups")
+def study_groups(launch_id: int, request: Request) -> dict:
+  """A study's groups as the report has them: per (group, task) the training curves' mean over
+  seeds with its 95 % bootstrap band, and per (group, task, budget, scene) the IQM of success and
+  progress with its stratified bootstrap interval."""
+  from train.study.results import CURVE_METRICS, load_results  # noqa: PLC0415
+  from train.study.statistics import curve_band, iqm_intervals  # noqa: PLC0415
+  launch = next((l for l in _db(request).launches() if l["id"] == launch_id and l["kind"] == "study"), None)
+  if launch is None:
+    raise HTTPException(status_code=404, detail=f"no study launch {launch_id}")
+  try:
+    results = load_results(launch["out_dir"])
+  except FileNotFoundError:
+    raise HTTPException(status_code=404, detail=f"study launch {launch_id} has no results yet") from None
+  curves = []
+  for g in results.spec.groups:
+    for task in results.spec.tasks:
+      for metric in CURVE_METRICS:
+        runs = results.curves(g.name, task, "step", metric)
+        if runs:
+          x, mean, lo, hi = curve_band(runs)
+          curves.append({"group": g.name, "task": task, "metric": metric, "runs": len(runs),
+                         "x": x.tolist(), "mean": mean.tolist(), "low": lo.tolist(), "high": hi.tolist()})
+  finals = []
+  for group, task, budget in results.groups():
+    est = iqm_intervals({f"{m} {s}": results.final(group, task, budget, s, m)
+                         for s in results.scenes() for m in ("success", "progress")})
+    finals.append({"group": group, "task": task, "budget": budget, "iqm": {k: list(v) for k, v in est.items()}})
+  return {"name": results.spec.name, "curves": curves, "final": finals}
