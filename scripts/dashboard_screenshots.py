@@ -1,12 +1,16 @@
-"""Screenshots of every dashboard page (docs/screenshots/) served over a real experiment database,
-by default the partial GPU study committed in results/studies/paper-ppo-part: the system Chromium
-driven by Playwright, headless. Usage: python scripts/dashboard_screenshots.py [--db PATH] [--out DIR]"""
+"""Screenshots of every dashboard page (docs/screenshots/) served over a copy of a real experiment
+database, by default the partial GPU study committed in results/studies/paper-ppo-part, plus one
+tiny CPU run launched from the form and run by the server's launcher (a local Dask cluster, the
+real train.run and train.evaluate) for the queue: the system Chromium driven by Playwright,
+headless. Usage: python scripts/dashboard_screenshots.py [--db PATH] [--out DIR]"""
 
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import socket
+import tempfile
 import threading
 import time
 
@@ -15,13 +19,15 @@ import uvicorn
 from train.server.app import create_app
 from train.server.settings import Settings
 
+TINY = ["observation.parts=[v, flippers_paired, arm, pitch]", "episode.max_steps=8"]  # the tests' tiny task
 
-def serve(db: str) -> tuple[str, uvicorn.Server]:
-  """A server (no launcher) on a free local port; returns its base URL."""
+
+def serve(db: str, runs_root: str = "results", launcher=None) -> tuple[str, uvicorn.Server]:
+  """A server on a free local port; returns its base URL."""
   with socket.socket() as s:
     s.bind(("127.0.0.1", 0))
     port = s.getsockname()[1]
-  server = uvicorn.Server(uvicorn.Config(create_app(Settings(db, "results")), host="127.0.0.1", port=port,
+  server = uvicorn.Server(uvicorn.Config(create_app(Settings(db, runs_root), launcher), host="127.0.0.1", port=port,
                                          log_level="warning"))
   threading.Thread(target=server.run, daemon=True).start()
   while not server.started:
@@ -51,8 +57,25 @@ def shoot(base: str, out: str) -> None:
     page.wait_for_function("document.querySelector('.error[data-for=\"episode.max_steps\"]').textContent")
     page.screenshot(path=f"{out}/new-experiment.png")
     page.goto(f"{base}/queue")
+    page.wait_for_function("[...document.querySelectorAll('#rows tr')].some(r => r.textContent.includes('done'))")
     page.screenshot(path=f"{out}/queue.png")
     browser.close()
+
+
+def launch_tiny_run(base: str) -> None:
+  """One tiny CPU run through the API, waited for until its launch ends."""
+  import json  # noqa: PLC0415
+  import urllib.request  # noqa: PLC0415
+  body = json.dumps({"task": "asc-inc-cog", "preset": "cpu", "steps": 512, "overrides": TINY, "eval_trials": 4})
+  req = urllib.request.Request(f"{base}/api/launches", body.encode(), {"Content-Type": "application/json"})
+  launch_id = json.load(urllib.request.urlopen(req))["id"]
+  while True:
+    launches = json.load(urllib.request.urlopen(f"{base}/api/launches"))
+    status = next(x["status"] for x in launches if x["id"] == launch_id)
+    if status not in ("queued", "running"):
+      print(f"tiny CPU run: launch {launch_id} {status}")
+      return
+    time.sleep(2)
 
 
 def main() -> None:
@@ -60,11 +83,22 @@ def main() -> None:
   p.add_argument("--db", default="results/studies/paper-ppo-part/study.sqlite")
   p.add_argument("--out", default="docs/screenshots")
   args = p.parse_args()
-  base, server = serve(args.db)
-  try:
-    shoot(base, args.out)
-  finally:
-    server.should_exit = True
+  from distributed import Client, LocalCluster  # noqa: PLC0415
+
+  from train.server.launcher import Launcher  # noqa: PLC0415
+  with tempfile.TemporaryDirectory() as tmp, \
+       LocalCluster(n_workers=1, threads_per_worker=1, resources={"cpu": 1}, dashboard_address=":0") as cluster, \
+       Client(cluster) as client:
+    db = os.path.join(tmp, "experiments.sqlite")
+    shutil.copy(args.db, db)
+    launcher = Launcher(db, tmp, client, ("cpu",)).start()
+    base, server = serve(db, tmp, launcher)
+    try:
+      launch_tiny_run(base)
+      shoot(base, args.out)
+    finally:
+      server.should_exit = True
+      launcher.stop()
   print(f"screenshots -> {args.out}")
 
 
