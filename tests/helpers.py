@@ -38,3 +38,37 @@ def wait_for(predicate, proc, timeout_s: float, what: str) -> None:
 def checkpoint_steps(out: str) -> list[int]:
   path = os.path.join(out, "checkpoints")
   return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []
+
+
+CHROMIUM_MISSING = "the browser tests need the system Chromium (apt-get install chromium), or MJX_TRACKS_NO_BROWSER=1"
+
+
+def chromium() -> str:
+  """The system Chromium's path (the browser tests fail without it; MJX_TRACKS_NO_BROWSER=1 skips them)."""
+  import shutil  # noqa: PLC0415
+  path = shutil.which("chromium") or shutil.which("chromium-browser")
+  assert path, CHROMIUM_MISSING
+  return path
+
+
+def serve_app(app):
+  """Serves a FastAPI app on a free local port in a thread; returns (base URL, stop())."""
+  import socket  # noqa: PLC0415
+  import threading  # noqa: PLC0415
+  import time  # noqa: PLC0415
+
+  import uvicorn  # noqa: PLC0415
+  with socket.socket() as s:
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+  server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
+  thread = threading.Thread(target=server.run, daemon=True)
+  thread.start()
+  while not server.started:
+    time.sleep(0.05)
+
+  def stop() -> None:
+    server.should_exit = True
+    thread.join(10)
+
+  return f"http://127.0.0.1:{port}", stop

@@ -1,54 +1,36 @@
 """The dashboard in a real browser: Playwright drives the system Chromium (headless, no browser
 download) against a server on a free port whose launches run on a local Dask cluster with the
-stand-in runner (tests/fake_study_run.py). A run is created from the form and reaches `done`; its
+stand-in runner (tests/fake_study_run.py; a real tiny CPU run made from the form: test_training.py). A run is created from the form and reaches `done`; its
 page shows a curve with points; two runs are compared; an invalid value shows its field error.
 The screenshots in docs/ come from scripts/dashboard_screenshots.py, on real runs."""
 
 import os
 import pathlib
-import shutil
-import socket
-import threading
-import time
 
 import pytest
-import uvicorn
 from distributed import Client, LocalCluster
+from helpers import chromium, serve_app
 
 from train.server.app import create_app
 from train.server.launcher import Launcher
 from train.server.settings import Settings
 
 FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 if os.environ.get("MJX_TRACKS_NO_BROWSER") == "1":
   pytest.skip("MJX_TRACKS_NO_BROWSER=1", allow_module_level=True)
 
 
-def _free_port() -> int:
-  with socket.socket() as s:
-    s.bind(("127.0.0.1", 0))
-    return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def base_url(tmp_path_factory):
-  assert CHROMIUM, "the browser tests need the system Chromium (apt-get install chromium), or MJX_TRACKS_NO_BROWSER=1"
   root = tmp_path_factory.mktemp("dash") / "runs"
   settings = Settings(str(root / "experiments.sqlite"), str(root))
   with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, resources={"cpu": 2},
                     dashboard_address=":0") as cluster, Client(cluster) as client:
     launcher = Launcher(settings.db, settings.runs_root, client, ("cpu",), ((FAKE, "train"), (FAKE, "evaluate")),
                         poll_s=0.1).start()
-    port = _free_port()
-    server = uvicorn.Server(uvicorn.Config(create_app(settings, launcher), host="127.0.0.1", port=port, log_level="warning"))
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    while not server.started:
-      time.sleep(0.05)
-    yield f"http://127.0.0.1:{port}"
-    server.should_exit = True
-    thread.join(10)
+    base, stop = serve_app(create_app(settings, launcher))
+    yield base
+    stop()
     launcher.stop()
 
 
@@ -56,7 +38,7 @@ def base_url(tmp_path_factory):
 def page():
   from playwright.sync_api import sync_playwright
   with sync_playwright() as p:
-    browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
+    browser = p.chromium.launch(executable_path=chromium(), headless=True, args=["--no-sandbox"])
     yield browser.new_page(viewport={"width": 1366, "height": 900})
     browser.close()
 

@@ -334,3 +334,45 @@ def test_a_database_from_before_row_sources_gains_the_column(tmp_path):
   d.start("r", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path), 10)
   d.log_stats("r", {"step": 1, "success_rate": 1.0, "source": "hardest"}, {})
   assert [(s["step"], s["source"]) for s in d.stats("r")] == [(1, "hardest")]
+
+
+def test_a_run_made_from_the_dashboard_form_trains_for_real(ppo_run, tmp_path):
+  """The system Chromium fills the dashboard's form with this file's tiny task and launches it; the
+  server's launcher runs the real train.run and train.evaluate on a local Dask cluster; the run
+  reaches done and its page draws its training curve. No evaluation suite (0 trials; the stand-in
+  tests cover it); here, after this file's runs, the compilation cache holds its training step."""
+  if os.environ.get("MJX_TRACKS_NO_BROWSER") == "1":
+    pytest.skip("MJX_TRACKS_NO_BROWSER=1")
+  from distributed import Client, LocalCluster
+  from helpers import chromium, serve_app
+  from playwright.sync_api import sync_playwright
+  from train.server.app import create_app
+  from train.server.launcher import Launcher
+  from train.server.settings import Settings
+  settings = Settings(str(tmp_path / "experiments.sqlite"), str(tmp_path))
+  with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, resources={"cpu": 1},
+                    dashboard_address=":0") as cluster, Client(cluster) as client, sync_playwright() as p:
+    launcher = Launcher(settings.db, settings.runs_root, client, ("cpu",), poll_s=0.2).start()
+    base, stop = serve_app(create_app(settings, launcher))
+    try:
+      page = p.chromium.launch(executable_path=chromium(), headless=True, args=["--no-sandbox"]).new_page()
+      page.goto(f"{base}/new")
+      page.wait_for_selector("#f-episode--max_steps")
+      for field, value in (("#steps", "1024"), ("#eval_trials", "0"), ("#f-episode--max_steps", "8"),
+                           ("#f-observation--parts", "[v, flippers_paired, arm, pitch]")):
+        page.fill(field, value)
+      page.click("#launch")
+      page.wait_for_function("document.getElementById('result').textContent.startsWith('queued')")
+      page.goto(f"{base}/queue")
+      page.wait_for_function("[...document.querySelectorAll('#rows tr')].some(r => /done|failed/.test(r.textContent))",
+                             timeout=300_000)
+      (launch,) = dbmod.ExperimentDB(settings.db).launches()
+      assert launch["status"] == "done", launch["error"]
+      (run,) = dbmod.ExperimentDB(settings.db).runs()
+      assert run["status"] == "done" and run["total_steps"] == 1024
+      page.goto(f"{base}/runs/{run['run_id']}")
+      page.wait_for_function("document.querySelector('.chart') && document.querySelector('.chart').data[0].x.length > 0")
+      assert not dbmod.ExperimentDB(settings.db).evals(run["run_id"])  # 0 evaluation trials: no suite
+    finally:
+      stop()
+      launcher.stop()

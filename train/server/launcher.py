@@ -45,7 +45,7 @@ def cell_of(spec: dict) -> Cell:
            "steps": [spec.get("steps", 2048)], "early_stop": spec.get("early_stop", ""),
            "set": list(spec.get("overrides", [])), "backend": spec.get("backend", "cpu")}
   study = study_from_dict({"name": "launch", "tasks": [spec.get("task")], "seeds": [spec.get("seed", 0)],
-                           "groups": [group], "eval_trials": spec.get("eval_trials", 100)})
+                           "groups": [group], "eval_trials": max(spec.get("eval_trials", 100), 1)})
   g = study.groups[0]
   return Cell(g.name, study.tasks[0], g.steps[0], study.seeds[0], g.algo, g.preset, g.early_stop, g.set, g.backend)
 
@@ -102,7 +102,10 @@ class Launcher:
       return
     cell = cell_of(spec)
     out = launch["out_dir"] or self._new_folder(cell, launch["id"])
-    eval_args = ["--suite", "--trials", str(spec.get("eval_trials", 100))]
+    trials = spec.get("eval_trials", 100)  # 0: no evaluation suite after training
+    eval_args = ["--suite", "--trials", str(trials)] if trials or kind == "evaluate" else []
+    if kind == "evaluate" and not trials:
+      eval_args[-1] = "100"
     backend = cell.backend if cell.backend in self.backends else self.backends[0]
     self.futures[launch["id"]] = self.client.submit(
         run_in_place, cell.train_args(), eval_args, out, self.db.path, kind == "resume", kind != "evaluate",

@@ -26,7 +26,7 @@ class LaunchRequest(BaseModel):
   seed: int = 0
   overrides: list[str] = []  # dotted KEY=VALUE, as `train.run --set`
   early_stop: str = ""
-  eval_trials: int = 100
+  eval_trials: int = 100  # trials per scene of the evaluation suite after training; 0: none
   backend: str = "cpu"
 
 
