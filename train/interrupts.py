@@ -53,10 +53,10 @@ class StopRequest:
     if self.requested is not None:
       print("second interrupt: exiting at once (the last checkpoint is kept)", file=self.stream, flush=True)
       os._exit(EXIT_CODE.get(self.requested, 130))
-    self.requested = signum
     name = signal.Signals(signum).name
     print(f"{name}: stopping after this update to save a checkpoint and the policy "
           "(press Ctrl-C again to quit at once)", file=self.stream, flush=True)
+    self.requested = signum  # after the message: the loop's own output cannot cut into it
 
   @property
   def exit_code(self) -> int:
