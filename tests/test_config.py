@@ -1,5 +1,7 @@
 """Task configs: every task loads; unknown keys, wrong types and bad values fail naming the key."""
 
+import re
+
 import pytest
 
 from mjx_tracks.envs.config import ConfigError, available_tasks, default_config, from_dict, load_config
@@ -109,3 +111,24 @@ def test_a_recorded_config_from_before_the_evaluation_section_loads_without_held
   raw = load_config("asc-inc-cog").to_dict()
   del raw["evaluation"]
   assert from_dict(raw).evaluation.held_out == ()
+
+
+def test_declared_ranges_are_what_validation_checks_and_what_the_form_shows():
+  from mjx_tracks.bounds import Bound
+  from train.server.schema import schema
+  assert [Bound(1, 480).contains(v) for v in (0, 1, 480, 481)] == [False, True, True, False]
+  assert [Bound(0.0, 1.0, hi_open=True).contains(v) for v in (0.0, 0.999, 1.0)] == [True, True, False]
+  assert [Bound(1.0, lo_open=True).contains(v) for v in (1.0, 1.0001)] == [False, True]
+  assert (Bound(1, 480).text(), Bound(0, 1, hi_open=True).text(), Bound(0).text(), Bound(1, lo_open=True).text()) == (
+      "[1, 480]", "[0, 1)", ">= 0", "> 1")
+  fields = {f["key"]: f for s in schema("asc-inc-cog") for f in s["fields"]}
+  assert (fields["episode.max_steps"]["range"], fields["episode.max_steps"]["default"]) == ("[1, 100000]", 50)
+  assert fields["physics.timestep"]["range"] == "[0.0005, 0.02]" and fields["physics.timestep"]["note"] == "s"
+  assert fields["scene.curriculum.window"]["range"] == ">= 1" and fields["scene.sampler"]["range"] == ""
+  for key, f in fields.items():  # each declared range is the one validation enforces, at both ends
+    if f["range"].startswith("["):
+      lo, hi = (float(x) for x in f["range"].strip("[]()").split(","))
+      for bad in (lo - 1, hi + 1):
+        bad = int(bad) if f["kind"] == "int" else bad
+        with pytest.raises(ConfigError, match=re.escape(key)):
+          load_config("asc-inc-cog", [f"{key}={bad}"])

@@ -8,14 +8,15 @@ type and each range, and fails with a message that names the dotted key.
 from __future__ import annotations
 
 import dataclasses
-import re
 import importlib.resources
 import pathlib
+import re
 import typing
 from typing import Any
 
 import yaml
 
+from mjx_tracks.bounds import bound, violation
 from mjx_tracks.sim.physics import PhysicsConfig
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
@@ -49,47 +50,41 @@ class ControlConfig:
   mode: str  # mjx_tracks.sim.control.CONTROL_MODES
   increments: bool  # the original's +-pi/10 increments, else absolute targets
   v_range: tuple[float, float]  # m/s
-  period: float  # s between actions
+  period: float = dataclasses.field(metadata=bound(0.01, 2.0))  # s between actions
 
   def validate(self, key: str) -> None:
     from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
     require(self.mode in CONTROL_MODES, f"{key}.mode", f"must be one of {sorted(CONTROL_MODES)}, got {self.mode!r}")
     require(self.v_range[0] < self.v_range[1], f"{key}.v_range", "needs min < max")
-    require(0.01 <= self.period <= 2.0, f"{key}.period", f"must be in [0.01, 2] s, got {self.period}")
 
 
 @dataclasses.dataclass(frozen=True)
 class ObservationConfig:
   parts: tuple[str, ...]  # names in mjx_tracks.envs.observations.PARTS
-  vertical_beams: int  # N_v
-  horizontal_beams: int  # N_h
-  band_px: int  # px, width of the central band a beam averages over
+  vertical_beams: int = dataclasses.field(metadata=bound(1, 480))  # N_v
+  horizontal_beams: int = dataclasses.field(metadata=bound(1, 640))  # N_h
+  band_px: int = dataclasses.field(metadata=bound(1, 480))  # px, width of the central band a beam averages over
   rays_per_band: tuple[int, int]  # rays cast per band (along, across)
   depth_range: tuple[float, float]  # m, hits outside are 0
-  noise: float  # fraction of rays hidden
+  noise: float = dataclasses.field(metadata=bound(0.0, 1.0, hi_open=True))  # fraction of rays hidden
 
   def validate(self, key: str) -> None:
     from mjx_tracks.envs.observations import PARTS  # noqa: PLC0415
     for p in self.parts:
       require(p in PARTS, f"{key}.parts", f"unknown part {p!r}; known: {sorted(PARTS)}")
     require(len(set(self.parts)) == len(self.parts), f"{key}.parts", "has duplicates")
-    require(1 <= self.vertical_beams <= 480, f"{key}.vertical_beams", "must be in [1, 480]")
-    require(1 <= self.horizontal_beams <= 640, f"{key}.horizontal_beams", "must be in [1, 640]")
-    require(1 <= self.band_px <= 480, f"{key}.band_px", "must be in [1, 480]")
     require(min(self.rays_per_band) >= 1, f"{key}.rays_per_band", "must be >= 1")
     require(0 <= self.depth_range[0] < self.depth_range[1], f"{key}.depth_range", "needs 0 <= min < max")
-    require(0.0 <= self.noise < 1.0, f"{key}.noise", "must be in [0, 1)")
 
 
 @dataclasses.dataclass(frozen=True)
 class CurriculumConfig:
-  window: int  # N_e finished episodes
+  window: int = dataclasses.field(metadata=bound(1))  # N_e finished episodes
   rule: str  # scenes.curriculum.RULES
 
   def validate(self, key: str) -> None:
     from scenes.curriculum import RULES  # noqa: PLC0415
     require(self.rule in RULES, f"{key}.rule", f"must be one of {RULES}, got {self.rule!r}")
-    require(self.window >= 1, f"{key}.window", "must be >= 1")
 
 
 _RENAMED_VARIANTS = {"paper": "paper_literal", "original": "original_code"}
@@ -126,32 +121,26 @@ class SceneConfig:
 @dataclasses.dataclass(frozen=True)
 class RewardConfig:
   kind: str  # free | cog | angular
-  progress_scale: float
-  cog_scale: float  # per-step COG deviation penalty weight (1/m)
-  angular_scale: float  # per-step |pitch rate| penalty weight (s/rad)
-  tipover_penalty: float
+  progress_scale: float = dataclasses.field(metadata=bound(0.0))
+  cog_scale: float = dataclasses.field(metadata=bound(0.0))  # per-step COG deviation penalty weight (1/m)
+  angular_scale: float = dataclasses.field(metadata=bound(0.0))  # per-step |pitch rate| penalty weight (s/rad)
+  tipover_penalty: float = dataclasses.field(metadata=bound(0.0))
   normalize_penalties: bool  # the original's K = 1 / mean penalty sum of the first episodes
-  normalize_episodes: int
-  safety_window: int  # samples averaged by the penalty
+  normalize_episodes: int = dataclasses.field(metadata=bound(1))
+  safety_window: int = dataclasses.field(metadata=bound(1))  # samples averaged by the penalty
 
   def validate(self, key: str) -> None:
     require(self.kind in ("free", "cog", "angular"), f"{key}.kind", "must be 'free', 'cog' or 'angular'")
-    for name in ("progress_scale", "cog_scale", "angular_scale", "tipover_penalty"):
-      require(getattr(self, name) >= 0, f"{key}.{name}", "must be >= 0")
-    require(self.normalize_episodes >= 1, f"{key}.normalize_episodes", "must be >= 1")
-    require(self.safety_window >= 1, f"{key}.safety_window", "must be >= 1")
 
 
 @dataclasses.dataclass(frozen=True)
 class EpisodeConfig:
-  max_steps: int  # control steps
-  goal_tolerance: float  # m, subtracted from the goal distance (reference)
-  away_factor: float  # terminate when dist > away_factor * d0
+  max_steps: int = dataclasses.field(metadata=bound(1, 100_000))  # control steps
+  goal_tolerance: float = dataclasses.field(metadata=bound(0.0))  # m, subtracted from the goal distance (reference)
+  away_factor: float = dataclasses.field(metadata=bound(1.0, lo_open=True))  # terminate when dist > away_factor * d0
 
   def validate(self, key: str) -> None:
-    require(1 <= self.max_steps <= 100_000, f"{key}.max_steps", "must be in [1, 100000]")
-    require(self.goal_tolerance >= 0, f"{key}.goal_tolerance", "must be >= 0")
-    require(self.away_factor > 1.0, f"{key}.away_factor", "must be > 1")
+    """Ranges only: declared on the fields, checked when the section is built."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -262,7 +251,11 @@ def _build(cls, raw: dict, key: str):
     require(k in names, f"{key}.{k}".lstrip("."), f"unknown key; known: {sorted(names)}")
   missing = [n for n in names if n not in raw]
   require(not missing, key or "config", f"missing keys {missing}")
-  return cls(**{k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()})
+  built = cls(**{k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()})
+  wrong = violation(built)  # the ranges declared on its fields (mjx_tracks.bounds)
+  if wrong is not None:
+    require(False, f"{key}.{wrong[0]}".lstrip("."), wrong[1])
+  return built
 
 
 def parse_mapping(cls, raw: dict, key: str = ""):

@@ -6,6 +6,7 @@ import dataclasses
 
 import mujoco
 
+from mjx_tracks.bounds import bound, violation
 from mjx_tracks.robots.mjcf import actuators_xml, robot_body_xml
 from mjx_tracks.robots.spec import RobotSpec
 from mjx_tracks.sim import mjx_private
@@ -16,24 +17,20 @@ class PhysicsConfig:
   """MuJoCo options shared by every scene (the `physics` section of a task config; defaults in
   configs/defaults.yaml)."""
 
-  timestep: float  # s, one physics substep
-  solver_iterations: int  # Newton iterations
-  ls_iterations: int  # line-search iterations
-  impratio: float  # friction-to-normal impedance ratio
+  timestep: float = dataclasses.field(metadata=bound(0.0005, 0.02))  # s, one physics substep
+  solver_iterations: int = dataclasses.field(metadata=bound(1))  # Newton iterations
+  ls_iterations: int = dataclasses.field(metadata=bound(1))  # line-search iterations
+  impratio: float = dataclasses.field(metadata=bound(0.0, lo_open=True))  # friction-to-normal impedance ratio
   contact_slots: int  # contacts kept per robot and substep, least distance first (MJX max_contact_points); -1: all
   box_pairs: int  # belt-box pairs tested per substep, nearest bounding spheres first (MJX max_geom_pairs); -1: all
 
   def validate(self, key: str = "physics") -> None:
-    if not 0.0005 <= self.timestep <= 0.02:
-      raise ValueError(f"{key}.timestep: must be in [0.0005, 0.02] s, got {self.timestep}")
-    for name in ("solver_iterations", "ls_iterations"):
-      if getattr(self, name) < 1:
-        raise ValueError(f"{key}.{name}: must be >= 1")
+    wrong = violation(self)  # the ranges declared on the fields
+    if wrong is not None:
+      raise ValueError(f"{key}.{wrong[0]}: {wrong[1]}")
     for name in ("contact_slots", "box_pairs"):
       if getattr(self, name) == 0 or getattr(self, name) < -1:
         raise ValueError(f"{key}.{name}: must be -1 (all) or >= 1, got {getattr(self, name)}")
-    if self.impratio <= 0:
-      raise ValueError(f"{key}.impratio: must be > 0")
 
 
 def build_mjcf(robot: RobotSpec, world: str, physics: PhysicsConfig) -> str:

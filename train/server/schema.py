@@ -1,6 +1,7 @@
 """The configuration schema the dashboard's form is built from: every key of the task config in
-its YAML section, with its type, its default (configs/defaults.yaml, or a task's own value) and
-the comment that follows it in configs/defaults.yaml (units, choices, ranges)."""
+its YAML section, with its type, its default (configs/defaults.yaml, or a task's own value), its
+allowed range where one is declared on the field (mjx_tracks.bounds, what validation checks) and
+the comment that follows it in configs/defaults.yaml (units, choices)."""
 
 from __future__ import annotations
 
@@ -47,12 +48,14 @@ def _fields(cls, values, prefix: str, notes: dict) -> list[dict]:
     else:
       plain = [dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v for v in value] \
           if isinstance(value, tuple) else value
-      out.append({"key": key, "kind": _kind(hints[f.name]), "default": plain, "note": notes.get(key, "")})
+      b = f.metadata.get("bound")  # mjx_tracks.bounds: the range validation checks
+      out.append({"key": key, "kind": _kind(hints[f.name]), "default": plain, "note": notes.get(key, ""),
+                  "range": b.text() if b else ""})
   return out
 
 
 def schema(task: str) -> list[dict]:
-  """[{section, fields: [{key, kind, default, note}]}] for a task, sections in the YAML's order."""
+  """[{section, fields: [{key, kind, default, note, range}]}] for a task, sections in the YAML's order."""
   cfg, notes = load_config(task), yaml_notes()
   sections = []
   for f in dataclasses.fields(TaskConfig):
@@ -61,5 +64,5 @@ def schema(task: str) -> list[dict]:
       sections.append({"section": f.name, "fields": _fields(type(value), value, f.name + ".", notes)})
     elif f.name != "task":
       sections.append({"section": f.name, "fields": [{"key": f.name, "kind": "str", "default": value,
-                                                       "note": notes.get(f.name, "")}]})
+                                                       "note": notes.get(f.name, ""), "range": ""}]})
   return sections
