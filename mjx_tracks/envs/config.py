@@ -45,6 +45,14 @@ def require(cond: bool, key: str, msg: str) -> None:
     raise ConfigError(f"{key}: {msg}", key)
 
 
+PLAIN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")  # names that are folder and file names too
+
+
+def require_plain_name(name: str, key: str) -> None:
+  """ConfigError unless `name` is a plain name (letters, digits, _ . -; not starting with _ . -)."""
+  require(bool(PLAIN_NAME.match(name)), key, f"{name!r} is not a plain name (letters, digits, _ . -)")
+
+
 @dataclasses.dataclass(frozen=True)
 class ControlConfig:
   mode: str  # mjx_tracks.sim.control.CONTROL_MODES
@@ -153,8 +161,7 @@ class HeldOutScene:
 
   def validate(self, key: str) -> None:
     from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
-    require(bool(re.match(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", self.name)), f"{key}.name",
-            f"{self.name!r} is not a plain name (letters, digits, _ . -)")
+    require_plain_name(self.name, f"{key}.name")
     for name, (lo, hi) in zip(STAIR_PARAMS, STAIR_LIMITS):
       require(lo <= getattr(self, name) <= hi, f"{key}.{name}", f"must be in [{lo}, {hi}], got {getattr(self, name)}")
 

@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import dataclasses
 import pathlib
-import re
 
 import yaml
 
 from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config,
-                                    parse_mapping, require)
+                                    parse_mapping, require, require_plain_name)
 from train.early_stop import parse_early_stop
 from train.presets import get_preset
 
@@ -19,7 +18,6 @@ STUDY_DEFAULTS = {"retries": 1, "eval_trials": 100, "compare": []}
 GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu", "budgets": "runs"}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
-NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")  # study and group names: folder names too
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,7 +84,7 @@ def _group(raw, i: int) -> GroupSpec:
   key = f"groups[{i}]"
   require(isinstance(raw, dict), key, f"must be a mapping, got {raw!r}")
   g = parse_mapping(GroupSpec, {**GROUP_DEFAULTS, **raw}, key)
-  require(bool(NAME.match(g.name)), f"{key}.name", f"{g.name!r} is not a plain name (letters, digits, _ . -)")
+  require_plain_name(g.name, f"{key}.name")
   try:
     get_preset(g.algo, g.preset)
   except ValueError as e:
@@ -120,7 +118,7 @@ def study_from_dict(raw: dict) -> StudySpec:
   require(isinstance(groups, list) and bool(groups), "groups", "must be a non-empty list")
   spec = parse_mapping(StudySpec, {**raw, "groups": []}, "")
   spec = dataclasses.replace(spec, groups=tuple(_group(g, i) for i, g in enumerate(groups)))
-  require(bool(NAME.match(spec.name)), "name", f"{spec.name!r} is not a plain name (letters, digits, _ . -)")
+  require_plain_name(spec.name, "name")
   names = [g.name for g in spec.groups]
   require(len(set(names)) == len(names), "groups", f"group names repeat: {names}")
   require(bool(spec.tasks) and bool(spec.seeds), "tasks / seeds", "each needs one or more entries")
