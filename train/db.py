@@ -274,6 +274,15 @@ class ExperimentDB:
                                          (run_id,))]
 
 
+  def eval_groups(self, run_id: str) -> dict[tuple[str, int | None], list[dict[str, Any]]]:
+    """Its evaluation trials by (scene, budget): the final policy's (budget None) first, then by
+    budget; scenes by name."""
+    groups: dict[tuple[str, int | None], list[dict[str, Any]]] = {}
+    for e in self.evals(run_id):
+      groups.setdefault((e["scene"], e["budget"]), []).append(e)
+    return groups
+
+
 class NullDB:
   """The records of a run's other processes under jax.distributed: process 0 keeps them."""
 
@@ -315,9 +324,7 @@ def _show(db: ExperimentDB, run: dict) -> None:
   stats = db.stats(run["run_id"])
   if stats:
     print("last statistics:", json.dumps({k: stats[-1][k] for k in STAT_COLUMNS}))
-  evals = db.evals(run["run_id"])
-  for budget, scene in sorted({(e["budget"] or 0, e["scene"]) for e in evals}):
-    trials = [e for e in evals if e["scene"] == scene and (e["budget"] or 0) == budget]
+  for (scene, budget), trials in db.eval_groups(run["run_id"]).items():
     mean = lambda k: sum(t[k] for t in trials) / len(trials)
     at = f" @ {budget:,} steps" if budget else ""
     print(f"eval {scene}{at}: {len(trials)} trials, progress {mean('progress'):.3f}, "

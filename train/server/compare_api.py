@@ -5,10 +5,10 @@ resamples instead of 2,000) and each run's mean."""
 from __future__ import annotations
 
 import numpy as np
-from fastapi import APIRouter, Depends, HTTPException, Query, Request
+from fastapi import APIRouter, Depends, Query, Request
 
-from train.db import ExperimentDB
 from train.server.auth import check_token
+from train.server.deps import db_of, run_or_404
 from train.study.statistics import iqm_intervals
 
 router = APIRouter(prefix="/api", tags=["compare"], dependencies=[Depends(check_token)])
@@ -19,17 +19,11 @@ REPS = 500  # bootstrap resamples: rliable takes ~0.3 s per figure at the report
 @router.get("/compare")
 def compare(request: Request, run: list[str] = Query(...)) -> list[dict]:
   """[{scene, budget, runs, per_run: {run: {metric: mean}}, iqm: {metric: [IQM, low, high]}}]."""
-  db = ExperimentDB(request.app.state.settings.db)
+  db = db_of(request)
   per: dict[tuple, dict[str, dict]] = {}
   for run_id in run:
-    try:
-      db.run(run_id)
-    except KeyError:
-      raise HTTPException(status_code=404, detail=f"no run {run_id!r}") from None
-    groups: dict[tuple, list[dict]] = {}
-    for e in db.evals(run_id):
-      groups.setdefault((e["scene"], e["budget"]), []).append(e)
-    for key, rows in groups.items():
+    run_or_404(db, run_id)
+    for key, rows in db.eval_groups(run_id).items():
       per.setdefault(key, {})[run_id] = {m: float(np.mean([r[m] for r in rows])) for m in METRICS}
   out = []
   for (scene, budget), runs in per.items():

@@ -12,8 +12,10 @@ from pydantic import BaseModel
 from mjx_tracks.envs.config import ConfigError
 from train.db import ExperimentDB
 from train.server.auth import check_token
+from train.server.deps import db_of, run_or_404
 from train.server.config_api import config_error
 from train.server.launcher import cell_of, stop_run_in, study_of
+from train.study.executor import STATE, STUDY_DB, read_cells, status_counts
 
 router = APIRouter(prefix="/api", tags=["launches"], dependencies=[Depends(check_token)])
 
@@ -37,10 +39,6 @@ def _launcher(request: Request):
   return launcher
 
 
-def _db(request: Request) -> ExperimentDB:
-  return ExperimentDB(request.app.state.settings.db)
-
-
 @router.post("/launches", status_code=201)
 def launch(body: LaunchRequest, request: Request):
   """Queues a run (checked like a study's runs; 422 names the faulty key)."""
@@ -50,7 +48,7 @@ def launch(body: LaunchRequest, request: Request):
     cell_of(spec)
   except ConfigError as e:
     return config_error(e)
-  return {"id": _db(request).add_launch("run", spec, None), "status": "queued"}
+  return {"id": db_of(request).add_launch("run", spec, None), "status": "queued"}
 
 
 class StudyRequest(BaseModel):
@@ -69,7 +67,7 @@ def launch_study(body: StudyRequest, request: Request):
   except ConfigError as e:
     return config_error(e)
   folder = os.path.join(os.path.abspath(request.app.state.settings.runs_root), "studies", study.name)
-  return {"id": _db(request).add_launch("study", {**spec, "name": study.name}, folder), "status": "queued",
+  return {"id": db_of(request).add_launch("study", {**spec, "name": study.name}, folder), "status": "queued",
           "folder": folder}
 
 
@@ -77,12 +75,12 @@ def launch_study(body: StudyRequest, request: Request):
 def studies(request: Request) -> list[dict]:
   """Every study launch with its runs' counts (done / failed / not finished) from its state.json."""
   out = []
-  for launch in _db(request).launches():
+  for launch in db_of(request).launches():
     if launch["kind"] == "study":
-      state_path = os.path.join(launch["out_dir"] or "", "state.json")
-      cells = json.load(open(state_path))["cells"] if os.path.exists(state_path) else {}
-      counts = {k: sum(1 for c in cells.values() if c["status"] == k) for k in ("done", "failed")}
-      db_path = os.path.join(launch["out_dir"] or "", "study.sqlite")
+      folder = launch["out_dir"] or ""
+      cells = read_cells(folder) if os.path.exists(os.path.join(folder, STATE)) else {}
+      counts = {k: v for k, v in status_counts(cells).items() if k in ("done", "failed")}
+      db_path = os.path.join(folder, STUDY_DB)
       run_ids = [r["run_id"] for r in ExperimentDB(db_path).runs()] if os.path.exists(db_path) else []
       out.append({**launch, "runs": len(cells), **counts, "run_ids": run_ids})
   return out
@@ -91,7 +89,7 @@ def studies(request: Request) -> list[dict]:
 @router.get("/launches")
 def launches(request: Request) -> list[dict]:
   """Every launch, oldest first: queued, running and finished."""
-  return _db(request).launches()
+  return db_of(request).launches()
 
 
 @router.delete("/launches/{launch_id}")
@@ -103,20 +101,13 @@ def cancel(launch_id: int, request: Request) -> dict:
     raise HTTPException(status_code=404, detail=f"no launch {launch_id}") from None
 
 
-def _run(request: Request, run_id: str) -> dict:
-  try:
-    return _db(request).run(run_id)
-  except KeyError:
-    raise HTTPException(status_code=404, detail=f"no run {run_id!r}") from None
-
-
 @router.post("/runs/{run_id}/stop")
 def stop(run_id: str, request: Request) -> dict:
   """SIGTERM to a running run (it checkpoints, exports and ends 'interrupted'); for any other a no-op."""
-  run = _run(request, run_id)
+  run = run_or_404(db_of(request), run_id)
   if run["status"] != "running":
     return {"detail": f"run {run_id} is {run['status']}; nothing to stop"}
-  sent = stop_run_in(_db(request), run["out_dir"])
+  sent = stop_run_in(db_of(request), run["out_dir"])
   return {"detail": f"run {run_id}: stop requested" if sent else f"run {run_id} runs on another host; not stopped"}
 
 
@@ -124,18 +115,18 @@ def stop(run_id: str, request: Request) -> dict:
 def resume(run_id: str, request: Request):
   """Queues the run to continue from its last checkpoint (409 while it runs or when it finished)."""
   _launcher(request)
-  run = _run(request, run_id)
+  run = run_or_404(db_of(request), run_id)
   if run["status"] in ("running", "done", "stopped_early"):
     raise HTTPException(status_code=409, detail=f"run {run_id} is {run['status']}; nothing to resume")
-  return {"id": _db(request).add_launch("resume", _spec_of(run), run["out_dir"]), "status": "queued"}
+  return {"id": db_of(request).add_launch("resume", _spec_of(run), run["out_dir"]), "status": "queued"}
 
 
 @router.post("/runs/{run_id}/evaluate", status_code=201)
 def evaluate(run_id: str, request: Request):
   """Queues the evaluation suite of the run's exported policy."""
   _launcher(request)
-  run = _run(request, run_id)
-  return {"id": _db(request).add_launch("evaluate", _spec_of(run), run["out_dir"]), "status": "queued"}
+  run = run_or_404(db_of(request), run_id)
+  return {"id": db_of(request).add_launch("evaluate", _spec_of(run), run["out_dir"]), "status": "queued"}
 
 
 def _spec_of(run: dict) -> dict:
@@ -151,7 +142,7 @@ def study_groups(launch_id: int, request: Request) -> dict:
   progress with its stratified bootstrap interval."""
   from train.study.results import CURVE_METRICS, load_results  # noqa: PLC0415
   from train.study.statistics import curve_band, iqm_intervals  # noqa: PLC0415
-  launch = next((l for l in _db(request).launches() if l["id"] == launch_id and l["kind"] == "study"), None)
+  launch = next((l for l in db_of(request).launches() if l["id"] == launch_id and l["kind"] == "study"), None)
   if launch is None:
     raise HTTPException(status_code=404, detail=f"no study launch {launch_id}")
   try:

@@ -12,16 +12,12 @@ import zipfile
 from fastapi import APIRouter, Depends, HTTPException, Request
 from fastapi.responses import FileResponse, StreamingResponse
 
-from train.db import ExperimentDB
 from train.server.auth import check_token
+from train.server.deps import db_of, run_or_404
 
 router = APIRouter(prefix="/api/runs", tags=["runs"], dependencies=[Depends(check_token)])
 LIST_FIELDS = ("run_id", "status", "task", "algo", "preset", "seed", "total_steps", "step", "steps_per_s",
                "return_mean", "success_rate", "eps", "started", "ended", "out_dir")
-
-
-def _db(request: Request) -> ExperimentDB:
-  return ExperimentDB(request.app.state.settings.db)
 
 
 def _duration_s(started: str | None, ended: str | None) -> float | None:
@@ -33,25 +29,18 @@ def _duration_s(started: str | None, ended: str | None) -> float | None:
   return (t1 - t0).total_seconds()
 
 
-def _run_or_404(db: ExperimentDB, run_id: str) -> dict:
-  try:
-    return db.run(run_id)
-  except KeyError:
-    raise HTTPException(status_code=404, detail=f"no run {run_id!r}") from None
-
-
 @router.get("")
 def list_runs(request: Request) -> list[dict]:
   """Every run: status, task, algorithm, seed, latest step, steps/s, return, success, eps, times."""
   return [{**{k: r.get(k) for k in LIST_FIELDS}, "duration_s": _duration_s(r["started"], r["ended"])}
-          for r in _db(request).summaries()]
+          for r in db_of(request).summaries()]
 
 
 @router.get("/{run_id}")
 def get_run(run_id: str, request: Request) -> dict:
   """One run: its record, configuration and events."""
-  db = _db(request)
-  run = _run_or_404(db, run_id)
+  db = db_of(request)
+  run = run_or_404(db, run_id)
   config = json.loads(run.pop("config_json") or "{}")
   final = json.loads(run.pop("final_json") or "{}")
   return {**run, "config": config, "final": final, "events": db.events(run_id),
@@ -61,8 +50,8 @@ def get_run(run_id: str, request: Request) -> dict:
 @router.get("/{run_id}/stats")
 def get_stats(run_id: str, request: Request, source: str | None = None) -> list[dict]:
   """Its statistics rows (source: train | eval | hardest; all when not given), by step."""
-  db = _db(request)
-  _run_or_404(db, run_id)
+  db = db_of(request)
+  run_or_404(db, run_id)
   rows = db.stats(run_id)
   for r in rows:
     r.pop("metrics_json", None)
@@ -72,11 +61,9 @@ def get_stats(run_id: str, request: Request, source: str | None = None) -> list[
 @router.get("/{run_id}/evals")
 def get_evals(run_id: str, request: Request) -> list[dict]:
   """Its evaluations, one entry per (scene, budget): the mean of each figure and every trial."""
-  db = _db(request)
-  _run_or_404(db, run_id)
-  groups: dict[tuple, list[dict]] = {}
-  for e in db.evals(run_id):
-    groups.setdefault((e["scene"], e["budget"]), []).append(e)
+  db = db_of(request)
+  run_or_404(db, run_id)
+  groups = db.eval_groups(run_id)
   figures = ("progress", "success", "cog_deviation", "pitch_rate", "tipped_over", "length")
   return [{"scene": scene, "budget": budget, "trials": len(rows),
            "mean": {k: sum(r[k] for r in rows) / len(rows) for k in figures},
@@ -87,7 +74,7 @@ def get_evals(run_id: str, request: Request) -> list[dict]:
 @router.get("/{run_id}/policy")
 def download_policy(run_id: str, request: Request) -> StreamingResponse:
   """The exported policy (RUN/policy/) as a zip; 403 if the run lies outside the runs folder."""
-  run = _run_or_404(_db(request), run_id)
+  run = run_or_404(db_of(request), run_id)
   try:
     folder = request.app.state.settings.inside_runs(os.path.join(run["out_dir"], "policy"))
   except ValueError as e:
@@ -108,7 +95,7 @@ def download_policy(run_id: str, request: Request) -> StreamingResponse:
 @router.get("/{run_id}/videos")
 def list_videos(run_id: str, request: Request) -> list[str]:
   """The rollout videos (MP4) in the run's folder, e.g. from `train.evaluate --video`."""
-  run = _run_or_404(_db(request), run_id)
+  run = run_or_404(db_of(request), run_id)
   folder = run["out_dir"]
   if not os.path.isdir(folder):
     return []
@@ -118,7 +105,7 @@ def list_videos(run_id: str, request: Request) -> list[str]:
 @router.get("/{run_id}/videos/{name}")
 def get_video(run_id: str, name: str, request: Request) -> FileResponse:
   """One of them; 403 for any path that leaves the runs folder, 404 for one that is not there."""
-  run = _run_or_404(_db(request), run_id)
+  run = run_or_404(db_of(request), run_id)
   try:
     path = request.app.state.settings.inside_runs(os.path.join(run["out_dir"], name))
   except ValueError as e:

@@ -19,6 +19,7 @@ from train.study.spec import Cell, StudySpec, cells
 from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
 
 STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
+STATE = "state.json"  # every cell's status and attempts
 
 
 def cell_folder_of(study_folder: str, cell_id: str) -> str:
@@ -30,10 +31,31 @@ def cell_folder(study_folder: str, cell: Cell) -> str:
   return cell_folder_of(study_folder, cell.id)
 
 
-def _run_id(run_folder: str) -> str | None:
+def run_id_in(run_folder: str) -> str | None:
   """The run id in a run folder's run.json, if it has one yet."""
   path = os.path.join(run_folder, "run.json")
   return json.load(open(path)).get("run_id") if os.path.exists(path) else None
+
+
+def read_cells(folder: str) -> dict:
+  """STUDY/state.json's cells as last saved; FileNotFoundError if the folder holds no study."""
+  return json.load(open(os.path.join(folder, STATE)))["cells"]
+
+
+def status_counts(cells: dict) -> dict[str, int]:
+  """Cells per status: done, running, queued, failed."""
+  out = {"done": 0, "running": 0, "queued": 0, "failed": 0}
+  for c in cells.values():
+    out[c["status"]] += 1
+  return out
+
+
+def overview(cells: dict) -> str:
+  """'N runs: D done, F failed, U not finished; A attempts'."""
+  n = status_counts(cells)
+  attempts = sum(len(c["attempts"]) for c in cells.values())
+  return (f"{len(cells)} runs: {n['done']} done, {n['failed']} failed, {n['running'] + n['queued']} not finished; "
+          f"{attempts} attempts")
 
 
 @dataclasses.dataclass
@@ -45,8 +67,8 @@ class StudyState:
 
   @staticmethod
   def load(folder: str, ids: list[str]) -> "StudyState":
-    path = os.path.join(folder, "state.json")
-    old = json.load(open(path))["cells"] if os.path.exists(path) else {}
+    path = os.path.join(folder, STATE)
+    old = read_cells(folder) if os.path.exists(path) else {}
     fresh = {i: {"status": "queued", "attempts": []} for i in ids}
     for i, c in old.items():
       if i in fresh:
@@ -64,10 +86,7 @@ class StudyState:
     os.replace(tmp, self.path)
 
   def counts(self) -> dict[str, int]:
-    out = {"done": 0, "running": 0, "queued": 0, "failed": 0}
-    for c in self.cells.values():
-      out[c["status"]] += 1
-    return out
+    return status_counts(self.cells)
 
 
 def _progress(name: str, state: StudyState, t0: float, finished_now: int, running: int | None, stream) -> None:
@@ -133,7 +152,7 @@ class StudyRunner:
           ExperimentDB(self.mirror_db).import_runs(os.path.join(local, RUN_DB), local)
     attempt.update(ended=time.time(), rc=res["rc"], phase=res["phase"], worker=res["worker"],
                    error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
-    db.log_attempt(self.spec.name, cid, len(record["attempts"]), attempt, _run_id(local))
+    db.log_attempt(self.spec.name, cid, len(record["attempts"]), attempt, run_id_in(local))
     failures = sum(1 for a in record["attempts"] if a["rc"] != 0 and not a.get("stopped"))
     retry = res["rc"] != 0 and failures <= self.spec.retries
     record["status"] = "done" if res["rc"] == 0 else "queued" if retry else "failed"

@@ -9,6 +9,7 @@ import os
 
 import numpy as np
 
+from train.study.executor import overview
 from train.study.figures import write_figures
 from train.study.paper import FIGURE9
 from train.study.results import StudyResults, load_results
@@ -79,10 +80,7 @@ def paper_table(results: StudyResults) -> list[str]:
 def attempts_lines(results: StudyResults) -> list[str]:
   """Runs done / failed / unfinished, retried runs and every failed attempt's reason."""
   state = results.state
-  n = {k: sum(1 for c in state.values() if c["status"] == k) for k in ("done", "failed")}
-  unfinished, attempts = len(state) - sum(n.values()), sum(len(c["attempts"]) for c in state.values())
-  lines = [f"- {len(state)} runs: {n['done']} done, {n['failed']} failed, {unfinished} not finished; "
-           f"{attempts} attempts."]
+  lines = [f"- {overview(state)}."]
   for cid, c in state.items():
     for i, a in enumerate(c["attempts"], 1):
       if a.get("rc") not in (0, None) or a.get("error"):

@@ -11,7 +11,7 @@ import os
 import numpy as np
 
 from train.db import ExperimentDB
-from train.study.executor import STUDY_DB, cell_folder_of
+from train.study.executor import STUDY_DB, cell_folder_of, read_cells, run_id_in
 from train.study.spec import Cell, StudySpec, cells, load_study
 
 SPEC_FILE = "study.yaml"  # the study's spec as it ran, written into its folder
@@ -79,14 +79,13 @@ def write_spec(folder: str, spec: StudySpec) -> None:
 def load_results(folder: str) -> StudyResults:
   """Every finished run of the study in `folder`; FileNotFoundError if there is no study."""
   spec = load_study(os.path.join(folder, SPEC_FILE))
-  state = json.load(open(os.path.join(folder, "state.json")))["cells"]
+  state = read_cells(folder)
   db = ExperimentDB(os.path.join(folder, STUDY_DB))
   runs = []
   for cell in cells(spec):
-    meta = os.path.join(cell_folder_of(folder, cell.id), "run.json")
-    if state.get(cell.id, {}).get("status") != "done" or not os.path.exists(meta):
+    run_id = run_id_in(cell_folder_of(folder, cell.id))  # None: no run.json came back
+    if state.get(cell.id, {}).get("status") != "done" or run_id is None:
       continue
-    run_id = json.load(open(meta))["run_id"]
     try:
       db.run(run_id)
     except KeyError:

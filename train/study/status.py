@@ -9,7 +9,7 @@ import json
 import os
 import sys
 
-from train.study.executor import cell_folder_of
+from train.study.executor import cell_folder_of, overview, read_cells
 
 
 def _success(run_folder: str) -> str:
@@ -21,12 +21,9 @@ def _success(run_folder: str) -> str:
 
 def summary(folder: str, runs: bool = False) -> list[str]:
   """The lines `status` prints; FileNotFoundError if the folder holds no study."""
-  state = json.load(open(os.path.join(folder, "state.json")))["cells"]
-  n = {k: sum(1 for c in state.values() if c["status"] == k) for k in ("done", "failed")}
-  attempts = sum(len(c["attempts"]) for c in state.values())
+  state = read_cells(folder)
   retried = sum(1 for c in state.values() if len(c["attempts"]) > 1)
-  lines = [f"study {os.path.basename(folder)}: {len(state)} runs: {n['done']} done, {n['failed']} failed, "
-           f"{len(state) - n['done'] - n['failed']} not finished; {attempts} attempts, {retried} runs retried"]
+  lines = [f"study {os.path.basename(folder)}: {overview(state)}, {retried} runs retried"]
   if runs:
     lines.append(f"{'run':<44} {'status':<8} {'attempts':>8}  {'last worker':<12} success (hardest)")
     for cid, c in state.items():
