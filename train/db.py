@@ -70,7 +70,8 @@ EVAL_COLUMNS = ("scene", "budget", "trial", "progress", "success", "cog_deviatio
 ADDED_COLUMNS = {"stats": (("source", "TEXT"),), "evals": (("budget", "INTEGER"),)}
 
 
-def _now() -> str:
+def utc_now() -> str:
+  """The current UTC time, ISO 8601 to the second: every time the database records."""
   return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
 
 
@@ -128,7 +129,7 @@ class ExperimentDB:
       else:
         c.execute("INSERT INTO experiments (run_id, task, algo, preset, seed, config_json, status, "
                   "started, out_dir, pid, host, total_steps) VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
-                  (run_id, task, algo, preset, seed, json.dumps(config), "running", _now(),
+                  (run_id, task, algo, preset, seed, json.dumps(config), "running", utc_now(),
                    os.path.abspath(out_dir), os.getpid(), socket.gethostname(), total_steps))
       self._event(c, run_id, "resumed" if row else "started", resume_step or 0)
 
@@ -136,7 +137,7 @@ class ExperimentDB:
     if event not in EVENTS:
       raise ValueError(f"unknown event {event!r}; known: {EVENTS}")
     c.execute("INSERT INTO events (run_id, event, step, time, detail) VALUES (?,?,?,?,?)",
-              (run_id, event, step, _now(), detail))
+              (run_id, event, step, utc_now(), detail))
 
   def wall_offset(self, run_id: str, step: int) -> float:
     """Training wall time (s) already spent up to a step (what a resumed run adds to)."""
@@ -160,7 +161,7 @@ class ExperimentDB:
              detail: str = "") -> None:
     with self._conn() as c:
       c.execute("UPDATE experiments SET status=?, ended=?, final_json=? WHERE run_id=?",
-                (status, _now(), json.dumps(final or {}), run_id))
+                (status, utc_now(), json.dumps(final or {}), run_id))
       self._event(c, run_id, STATUS_EVENT[status], step, detail)
 
   def log_evals(self, run_id: str, trials: list[dict[str, Any]],
@@ -171,7 +172,7 @@ class ExperimentDB:
         c.execute("DELETE FROM evals WHERE run_id=? AND scene=? AND budget IS ?", (run_id, *replace))
       c.executemany(f"INSERT INTO evals (run_id, {', '.join(EVAL_COLUMNS)}, created) "
                     f"VALUES (?, {', '.join('?' * len(EVAL_COLUMNS))}, ?)",
-                    [[run_id, *[t.get(k) for k in EVAL_COLUMNS], _now()] for t in trials])
+                    [[run_id, *[t.get(k) for k in EVAL_COLUMNS], utc_now()] for t in trials])
 
   def log_attempt(self, study: str, cell: str, attempt: int, record: dict[str, Any], run_id: str | None) -> None:
     """A study's attempt at one of its runs (train.study): when, where, how it ended."""
@@ -188,7 +189,7 @@ class ExperimentDB:
     """Queues a launch (kind: run | resume | evaluate); returns its id."""
     with self._conn() as c:
       cur = c.execute("INSERT INTO launches (kind, spec_json, status, out_dir, created) VALUES (?, ?, 'queued', ?, ?)",
-                      (kind, json.dumps(spec), out_dir, _now()))
+                      (kind, json.dumps(spec), out_dir, utc_now()))
       return int(cur.lastrowid)
 
   def set_launch(self, launch_id: int, **fields) -> None:

@@ -6,21 +6,17 @@ to resume from their checkpoints."""
 
 from __future__ import annotations
 
-import datetime
 import os
 import signal
 import socket
 import threading
 
-from train.db import ExperimentDB
+from train.db import ExperimentDB, utc_now
+from train.evaluate import EVAL_TRIALS
 from train.study.spec import Cell, study_from_dict
 from train.study.worker import EVALUATE, TRAIN, run_in_place
 
 STOPPED = 143  # train.run's exit code after SIGTERM (checkpoint written, policy exported)
-
-
-def _now() -> str:
-  return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
 
 
 def study_of(spec: dict):
@@ -45,7 +41,7 @@ def cell_of(spec: dict) -> Cell:
            "steps": [spec.get("steps", 2048)], "early_stop": spec.get("early_stop", ""),
            "set": list(spec.get("overrides", [])), "backend": spec.get("backend", "cpu")}
   study = study_from_dict({"name": "launch", "tasks": [spec.get("task")], "seeds": [spec.get("seed", 0)],
-                           "groups": [group], "eval_trials": max(spec.get("eval_trials", 100), 1)})
+                           "groups": [group], "eval_trials": max(spec.get("eval_trials", EVAL_TRIALS), 1)})
   g = study.groups[0]
   return Cell(g.name, study.tasks[0], g.steps[0], study.seeds[0], g.algo, g.preset, g.early_stop, g.set, g.backend)
 
@@ -92,8 +88,10 @@ class Launcher:
         for lid, future in list(self.futures.items()):
           if (not future.is_alive()) if isinstance(future, threading.Thread) else future.done():
             self._settle(lid, future)
-          elif self.db.launch(lid)["status"] == "cancelled":  # its run may have started since the cancel
-            stop_run_in(self.db, self.db.launch(lid)["out_dir"])
+          else:
+            launch = self.db.launch(lid)
+            if launch["status"] == "cancelled":  # its run may have started since the cancel
+              stop_run_in(self.db, launch["out_dir"])
 
   def _submit(self, launch: dict) -> None:
     spec, kind = launch["spec"], launch["kind"]
@@ -102,15 +100,14 @@ class Launcher:
       return
     cell = cell_of(spec)
     out = launch["out_dir"] or self._new_folder(cell, launch["id"])
-    trials = spec.get("eval_trials", 100)  # 0: no evaluation suite after training
-    eval_args = ["--suite", "--trials", str(trials)] if trials or kind == "evaluate" else []
-    if kind == "evaluate" and not trials:
-      eval_args[-1] = "100"
+    # 0 trials: no evaluation suite after training; an evaluate launch always evaluates
+    trials = spec.get("eval_trials", EVAL_TRIALS) or (EVAL_TRIALS if kind == "evaluate" else 0)
+    eval_args = ["--suite", "--trials", str(trials)] if trials else []
     backend = cell.backend if cell.backend in self.backends else self.backends[0]
     self.futures[launch["id"]] = self.client.submit(
         run_in_place, cell.train_args(), eval_args, out, self.db.path, kind == "resume", kind != "evaluate",
         self.commands, key=f"launch-{launch['id']}", pure=False, resources={backend: 1})
-    self.db.set_launch(launch["id"], status="running", started=_now(), out_dir=out)
+    self.db.set_launch(launch["id"], status="running", started=utc_now(), out_dir=out)
 
   def _start_study(self, launch: dict) -> None:
     """A study launch: the study executor (train.study) on this launcher's cluster, in a thread;
@@ -136,7 +133,7 @@ class Launcher:
     thread = threading.Thread(target=run, name=f"study-{launch['id']}", daemon=True)
     thread.outcome, thread.runner = outcome, runner
     self.futures[launch["id"]] = thread
-    self.db.set_launch(launch["id"], status="running", started=_now(), out_dir=folder)
+    self.db.set_launch(launch["id"], status="running", started=utc_now(), out_dir=folder)
     thread.start()
 
   def _new_folder(self, cell: Cell, launch_id: int) -> str:
@@ -161,7 +158,7 @@ class Launcher:
         res = {"rc": None, "log_tail": repr(e)}
     cancelled = self.db.launch(launch_id)["status"] == "cancelled"
     status = "cancelled" if cancelled else "done" if res["rc"] == 0 else "stopped" if res["rc"] == STOPPED else "failed"
-    self.db.set_launch(launch_id, status=status, ended=_now(), rc=res["rc"],
+    self.db.set_launch(launch_id, status=status, ended=utc_now(), rc=res["rc"],
                        error="" if res["rc"] == 0 else res["log_tail"][-500:])
 
   def cancel(self, launch_id: int) -> str:
@@ -170,7 +167,7 @@ class Launcher:
       launch = self.db.launch(launch_id)  # KeyError if unknown
       if launch["status"] not in ("queued", "running"):
         return f"launch {launch_id} is {launch['status']}; nothing to cancel"
-      self.db.set_launch(launch_id, status="cancelled", ended=_now())
+      self.db.set_launch(launch_id, status="cancelled", ended=utc_now())
       task = self.futures.get(launch_id)
       if isinstance(task, threading.Thread):
         task.runner.cancel.set()  # a study: its queued runs are cancelled

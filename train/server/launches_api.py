@@ -11,6 +11,7 @@ from pydantic import BaseModel
 
 from mjx_tracks.envs.config import ConfigError
 from train.db import ExperimentDB
+from train.evaluate import EVAL_TRIALS
 from train.server.auth import check_token
 from train.server.deps import db_of, run_or_404
 from train.server.config_api import config_error
@@ -28,7 +29,7 @@ class LaunchRequest(BaseModel):
   seed: int = 0
   overrides: list[str] = []  # dotted KEY=VALUE, as `train.run --set`
   early_stop: str = ""
-  eval_trials: int = 100  # trials per scene of the evaluation suite after training; 0: none
+  eval_trials: int = EVAL_TRIALS  # trials per scene of the evaluation suite after training; 0: none
   backend: str = "cpu"
 
 

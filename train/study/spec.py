@@ -12,9 +12,10 @@ import yaml
 from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config,
                                     parse_mapping, require, require_plain_name)
 from train.early_stop import parse_early_stop
+from train.evaluate import EVAL_TRIALS
 from train.presets import get_preset
 
-STUDY_DEFAULTS = {"retries": 1, "eval_trials": 100, "compare": []}
+STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": []}
 GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu", "budgets": "runs"}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
