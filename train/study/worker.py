@@ -36,27 +36,35 @@ def _call(argv: list[str], log_path: str) -> int:
     return subprocess.call(argv, stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
 
 
+def _train_then_evaluate(run_args: list[str], eval_args: list[str], out: str, db: str, resume: bool, train: bool,
+                         commands: tuple[tuple[str, ...], tuple[str, ...]], log: str) -> tuple[str, int]:
+  """Trains into `out` (resuming it if asked; not at all if not train), then, if that went well and
+  there are evaluation arguments, evaluates; (phase reached, its exit code)."""
+  phase, rc = "train", 0
+  if train:
+    given = ["--resume", out] if resume else [*run_args, "--out", out]
+    rc = _call([sys.executable, *commands[0], *given, "--db", db], log)
+  if rc == 0 and eval_args:
+    phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log)
+  return phase, rc
+
+
 def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, train: bool = True,
              commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
   """{"rc", "phase" (train | evaluate), "tar" (the run folder, or None), "log_tail", "worker"}."""
   scratch = tempfile.mkdtemp(prefix="study-cell-")
   out, log = os.path.join(scratch, "run"), os.path.join(scratch, "attempt.log")
   try:
-    db = os.path.join(out, RUN_DB)
     if resume is not None:
       unpack(resume, out)
-    phase, rc = "train", 0
-    if train:
-      given = ["--resume", out] if resume is not None else [*run_args, "--out", out]
-      rc = _call([sys.executable, *commands[0], *given, "--db", db], log)
-    if rc == 0:
-      phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log)
-    tail = open(log).read()[-2000:] if os.path.exists(log) else ""
+    phase, rc = _train_then_evaluate(run_args, eval_args, out, os.path.join(out, RUN_DB), resume is not None,
+                                     train, commands, log)
+    output = open(log).read() if os.path.exists(log) else ""
     if not os.path.isdir(out):
-      return {"rc": rc, "phase": phase, "tar": None, "log_tail": tail, "worker": _worker_name()}
+      return {"rc": rc, "phase": phase, "tar": None, "log_tail": output[-2000:], "worker": _worker_name()}
     with open(os.path.join(out, "study-attempts.log"), "a") as f:  # every attempt's output, in order
-      f.write(open(log).read() if os.path.exists(log) else "")
-    return {"rc": rc, "phase": phase, "tar": pack(out), "log_tail": tail, "worker": _worker_name()}
+      f.write(output)
+    return {"rc": rc, "phase": phase, "tar": pack(out), "log_tail": output[-2000:], "worker": _worker_name()}
   finally:
     shutil.rmtree(scratch, ignore_errors=True)
 
@@ -67,11 +75,9 @@ def run_in_place(run_args: list[str], eval_args: list[str], out: str, db: str, r
   (resuming it if asked; not at all if not train) with its records in `db`, then evaluates;
   {"rc", "phase", "log_tail", "worker"}."""
   log = out + ".log"  # beside the run folder (train.run wants a new folder empty): every attempt's output
-  given = ["--resume", out] if resume else [*run_args, "--out", out]
-  phase, rc = "train", _call([sys.executable, *commands[0], *given, "--db", db], log) if train else 0
-  if rc == 0 and eval_args:
-    phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log)
-  return {"rc": rc, "phase": phase, "log_tail": open(log).read()[-2000:], "worker": _worker_name()}
+  phase, rc = _train_then_evaluate(run_args, eval_args, out, db, resume, train, commands, log)
+  return {"rc": rc, "phase": phase, "log_tail": open(log).read()[-2000:] if os.path.exists(log) else "",
+          "worker": _worker_name()}
 
 
 def _worker_name() -> str:
