@@ -34,7 +34,7 @@ def main() -> None:
   from playwright.sync_api import sync_playwright  # noqa: PLC0415
   with tempfile.TemporaryDirectory() as tmp:
     make_db(f"{tmp}/db.sqlite", args.runs)
-    base, server = serve(f"{tmp}/db.sqlite")
+    base, stop = serve(f"{tmp}/db.sqlite")
     with sync_playwright() as pw:
       browser = pw.chromium.launch(executable_path=shutil.which("chromium"), headless=True, args=["--no-sandbox"])
       page, times = browser.new_page(), []
@@ -43,7 +43,7 @@ def main() -> None:
         page.wait_for_function(f"document.querySelectorAll('#rows tr').length == {args.runs}")
         times.append(page.evaluate("performance.now()"))
       browser.close()
-    server.should_exit = True
+    stop()
   print(f"runs page, {args.runs:,} runs: {statistics.median(times):.0f} ms median from navigation start to the "
         f"last row (loads: {', '.join(f'{t:.0f}' for t in times)} ms); chromium headless, {sys.platform}")
 

@@ -9,30 +9,19 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
-import socket
 import tempfile
-import threading
 import time
 
-import uvicorn
-
 from train.server.app import create_app
+from train.server.background import serve_in_thread
 from train.server.settings import Settings
 
 TINY = ["observation.parts=[v, flippers_paired, arm, pitch]", "episode.max_steps=8"]  # the tests' tiny task
 
 
-def serve(db: str, runs_root: str = "results", launcher=None) -> tuple[str, uvicorn.Server]:
-  """A server on a free local port; returns its base URL."""
-  with socket.socket() as s:
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-  server = uvicorn.Server(uvicorn.Config(create_app(Settings(db, runs_root), launcher), host="127.0.0.1", port=port,
-                                         log_level="warning"))
-  threading.Thread(target=server.run, daemon=True).start()
-  while not server.started:
-    time.sleep(0.05)
-  return f"http://127.0.0.1:{port}", server
+def serve(db: str, runs_root: str = "results", launcher=None) -> tuple[str, object]:
+  """The dashboard over `db` on a free local port; returns (base URL, stop())."""
+  return serve_in_thread(create_app(Settings(db, runs_root), launcher))
 
 
 def shoot(base: str, out: str) -> None:
@@ -92,12 +81,12 @@ def main() -> None:
     db = os.path.join(tmp, "experiments.sqlite")
     shutil.copy(args.db, db)
     launcher = Launcher(db, tmp, client, ("cpu",)).start()
-    base, server = serve(db, tmp, launcher)
+    base, stop = serve(db, tmp, launcher)
     try:
       launch_tiny_run(base)
       shoot(base, args.out)
     finally:
-      server.should_exit = True
+      stop()
       launcher.stop()
   print(f"screenshots -> {args.out}")
 

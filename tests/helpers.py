@@ -49,26 +49,3 @@ def chromium() -> str:
   path = shutil.which("chromium") or shutil.which("chromium-browser")
   assert path, CHROMIUM_MISSING
   return path
-
-
-def serve_app(app):
-  """Serves a FastAPI app on a free local port in a thread; returns (base URL, stop())."""
-  import socket  # noqa: PLC0415
-  import threading  # noqa: PLC0415
-  import time  # noqa: PLC0415
-
-  import uvicorn  # noqa: PLC0415
-  with socket.socket() as s:
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-  server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
-  thread = threading.Thread(target=server.run, daemon=True)
-  thread.start()
-  while not server.started:
-    time.sleep(0.05)
-
-  def stop() -> None:
-    server.should_exit = True
-    thread.join(10)
-
-  return f"http://127.0.0.1:{port}", stop

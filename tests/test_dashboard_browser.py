@@ -9,9 +9,10 @@ import pathlib
 
 import pytest
 from distributed import Client, LocalCluster
-from helpers import chromium, serve_app
+from helpers import chromium
 
 from train.server.app import create_app
+from train.server.background import serve_in_thread
 from train.server.launcher import Launcher
 from train.server.settings import Settings
 
@@ -28,7 +29,7 @@ def base_url(tmp_path_factory):
                     dashboard_address=":0") as cluster, Client(cluster) as client:
     launcher = Launcher(settings.db, settings.runs_root, client, ("cpu",), ((FAKE, "train"), (FAKE, "evaluate")),
                         poll_s=0.1).start()
-    base, stop = serve_app(create_app(settings, launcher))
+    base, stop = serve_in_thread(create_app(settings, launcher))
     yield base
     stop()
     launcher.stop()

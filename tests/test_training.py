@@ -344,16 +344,17 @@ def test_a_run_made_from_the_dashboard_form_trains_for_real(ppo_run, tmp_path):
   if os.environ.get("MJX_TRACKS_NO_BROWSER") == "1":
     pytest.skip("MJX_TRACKS_NO_BROWSER=1")
   from distributed import Client, LocalCluster
-  from helpers import chromium, serve_app
+  from helpers import chromium
   from playwright.sync_api import sync_playwright
   from train.server.app import create_app
+  from train.server.background import serve_in_thread
   from train.server.launcher import Launcher
   from train.server.settings import Settings
   settings = Settings(str(tmp_path / "experiments.sqlite"), str(tmp_path))
   with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, resources={"cpu": 1},
                     dashboard_address=":0") as cluster, Client(cluster) as client, sync_playwright() as p:
     launcher = Launcher(settings.db, settings.runs_root, client, ("cpu",), poll_s=0.2).start()
-    base, stop = serve_app(create_app(settings, launcher))
+    base, stop = serve_in_thread(create_app(settings, launcher))
     try:
       page = p.chromium.launch(executable_path=chromium(), headless=True, args=["--no-sandbox"]).new_page()
       page.goto(f"{base}/new")
