@@ -19,17 +19,19 @@ function nav(active) {
 // the training curves every run page and the compare page draw: statistics column -> title
 const CURVES = {return_mean: "return", progress_mean: "progress", success_rate: "success", eps: "eps",
                 cog_deviation_mean: "COG deviation (m)", pitch_rate_mean: "|pitch rate| (rad/s)", steps_per_s: "steps/s"};
-function drawCurves(el, series, x) {  // series: [{name, rows}] of statistics rows; x: "step" | "wall_s"
+function drawCharts(el, tracesOf, layout = {}, suffix = "") {  // a chart per CURVES figure with traces
   el.innerHTML = "";
   for (const [key, title] of Object.entries(CURVES)) {
-    const traces = series.map(({name, rows}) => {
-      const pts = rows.filter((r) => r[key] != null && r[x] != null);
-      return {x: pts.map((r) => r[x]), y: pts.map((r) => r[key]), name, mode: "lines+markers", type: "scatter"};
-    });
+    const traces = tracesOf(key);
     if (!traces.some((t) => t.x.length)) continue;  // a figure no row has: no empty chart
     const div = document.createElement("div"); div.className = "chart"; el.appendChild(div);
-    Plotly.react(div, traces, {title: {text: title, font: {size: 13}}, margin: {t: 30, l: 50, r: 10, b: 40},
-      xaxis: {title: {text: x === "step" ? "environment steps" : "wall time (s)"}}, showlegend: series.length > 1,
-      legend: {font: {size: 9}}, height: 260}, {displayModeBar: false, responsive: true});
+    Plotly.react(div, traces, Object.assign({title: {text: title + suffix, font: {size: 13}}, height: 260,
+      margin: {t: 30, l: 50, r: 10, b: 40}, legend: {font: {size: 9}}}, layout), {displayModeBar: false, responsive: true});
   }
+}
+function drawCurves(el, series, x) {  // series: [{name, rows}] of statistics rows; x: "step" | "wall_s"
+  drawCharts(el, (key) => series.map(({name, rows}) => {
+    const pts = rows.filter((r) => r[key] != null && r[x] != null);
+    return {x: pts.map((r) => r[x]), y: pts.map((r) => r[key]), name, mode: "lines+markers", type: "scatter"};
+  }), {xaxis: {title: {text: x === "step" ? "environment steps" : "wall time (s)"}}, showlegend: series.length > 1});
 }
