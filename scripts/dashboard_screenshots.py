@@ -57,12 +57,14 @@ def launch_tiny_run(base: str) -> None:
   import urllib.request  # noqa: PLC0415
   body = json.dumps({"task": "asc-inc-cog", "preset": "cpu", "steps": 512, "overrides": TINY, "eval_trials": 4})
   req = urllib.request.Request(f"{base}/api/launches", body.encode(), {"Content-Type": "application/json"})
+  t0 = time.time()
   launch_id = json.load(urllib.request.urlopen(req))["id"]
   while True:
     launches = json.load(urllib.request.urlopen(f"{base}/api/launches"))
     status = next(x["status"] for x in launches if x["id"] == launch_id)
     if status not in ("queued", "running"):
-      print(f"tiny CPU run: launch {launch_id} {status}")
+      print(f"tiny CPU run (train.run + train.evaluate --suite, 4 trials): launch {launch_id} {status} "
+            f"{time.time() - t0:.0f} s after it was queued")
       return
     time.sleep(2)
 
