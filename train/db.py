@@ -214,20 +214,21 @@ class ExperimentDB:
       r["spec"] = json.loads(r.pop("spec_json"))
     return [r for r in rows if status is None or r["status"] == status]
 
-  def import_runs(self, src: str, out_dir: str | None = None) -> list[str]:
-    """Copies every run of another database file (e.g. one that came back from a study's worker)
-    into this one, replacing the rows of the same run ids; out_dir, if given, becomes their run
-    folder. Returns the run ids."""
+  def import_runs(self, src: str, out_dir: str | None = None, only: list[str] | None = None) -> list[str]:
+    """Copies every run of another database file (e.g. one that came back from a study's worker),
+    or those whose ids are in `only`, into this one, replacing the rows of the same run ids;
+    out_dir, if given, becomes their run folder. Returns the run ids."""
     tables = ("experiments", "stats", "events", "evals")
     with self._conn() as c:
       c.execute("ATTACH DATABASE ? AS src", (src,))
-      ids = [r[0] for r in c.execute("SELECT run_id FROM src.experiments")]
+      ids = [r[0] for r in c.execute("SELECT run_id FROM src.experiments") if only is None or r[0] in only]
+      marks = ", ".join("?" * len(ids))
       for table in reversed(tables):
         c.executemany(f"DELETE FROM {table} WHERE run_id=?", [(i,) for i in ids])
       for table in tables:
         mine = {r["name"] for r in c.execute(f"PRAGMA main.table_info({table})")}
         cols = ", ".join(r["name"] for r in c.execute(f"PRAGMA src.table_info({table})") if r["name"] in mine)
-        c.execute(f"INSERT INTO main.{table} ({cols}) SELECT {cols} FROM src.{table}")
+        c.execute(f"INSERT INTO main.{table} ({cols}) SELECT {cols} FROM src.{table} WHERE run_id IN ({marks})", ids)
       if out_dir is not None:
         c.executemany("UPDATE experiments SET out_dir=? WHERE run_id=?", [(os.path.abspath(out_dir), i) for i in ids])
     return ids

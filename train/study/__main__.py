@@ -2,7 +2,8 @@
 of one in configs/studies/) on a Dask cluster: by default one started here (a worker per GPU, CPU
 slots), or an existing one (--scheduler). Finished runs of an earlier start are skipped; --plan
 lists the runs and stops. `python -m train.study status NAME [--runs]`: where it stands;
-`python -m train.study report NAME`: STUDY/report.md with statistics and figures."""
+`python -m train.study report NAME`: STUDY/report.md with statistics and figures;
+`python -m train.study merge DEST SRC...`: runs finished in other folders of the study into DEST."""
 
 from __future__ import annotations
 
@@ -45,6 +46,9 @@ def main(argv=None) -> int:
   if argv[:1] == ["report"]:
     from train.study.report import main as report_main  # noqa: PLC0415
     return report_main(argv[1:])
+  if argv[:1] == ["merge"]:
+    from train.study.merge import main as merge_main  # noqa: PLC0415
+    return merge_main(argv[1:])
   args = parser().parse_args(argv)
   try:
     spec = load_study(args.study, tuple(args.set))

@@ -1,0 +1,88 @@
+"""`train.study merge`: a study whose runs were finished in another folder (another machine) gets
+those runs' folders, database rows and attempts, and then reports exactly what the study that ran
+everything in one place reports."""
+
+import json
+import os
+import pathlib
+import shutil
+import sqlite3
+
+import pytest
+from distributed import Client
+
+from train.db import ExperimentDB
+from train.study.executor import STUDY_DB, StudyRunner, cell_folder_of, read_cells, run_id_in
+from train.study.merge import main as merge_main, merge
+from train.study.report import write_report
+from train.study.spec import study_from_dict
+
+FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
+COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))  # after the worker's Python
+STUDY = {"name": "m", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], "retries": 0, "eval_trials": 4,
+         "groups": [{"name": "g", "algo": "ppo", "preset": "cpu", "steps": [200], "backend": "cpu"}],
+         "compare": [["asc-inc-cog", "asc-uni-cog"]]}
+UNFINISHED = ("g/asc-inc-cog/200/s1", "g/asc-uni-cog/200/s1")  # stopped in DEST, finished in SRC
+NO_FOLDER = "g/asc-uni-cog/200/s0"  # done in DEST, but its run folder and rows did not come back
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory) -> str:
+  """The whole study run in one folder by the study runner (the stand-in train.run)."""
+  folder = str(tmp_path_factory.mktemp("full") / "m")
+  with Client(processes=False, n_workers=1, threads_per_worker=2, resources={"cpu": 2}, dashboard_address=":0") as c:
+    counts = StudyRunner(study_from_dict(STUDY), folder, c, COMMANDS, backends=("cpu",)).run()
+  assert counts["done"] == 4
+  return folder
+
+
+def _forget(folder: str, cid: str, stopped: bool) -> str:
+  """Removes a cell's run folder and database rows; stopped: its state says an attempt was cut off."""
+  run_id = run_id_in(cell_folder_of(folder, cid))
+  shutil.rmtree(cell_folder_of(folder, cid))
+  with sqlite3.connect(os.path.join(folder, STUDY_DB)) as c:
+    for table in ("evals", "events", "stats", "experiments"):
+      c.execute(f"DELETE FROM {table} WHERE run_id=?", (run_id,))
+    c.execute("DELETE FROM attempts WHERE cell=?", (cid,))
+  path = os.path.join(folder, "state.json")
+  state = json.load(open(path))
+  if stopped:
+    state["cells"][cid] = {"status": "queued", "attempts": [{"started": 1.0, "ended": None, "rc": None,
+                                                             "stopped": True, "error": "the study stopped"}]}
+  json.dump(state, open(path, "w"))
+  return run_id
+
+
+def _evals(folder: str, run_id: str) -> list[tuple]:
+  return [(e["scene"], e["budget"], e["trial"], e["success"]) for e in ExperimentDB(os.path.join(folder, STUDY_DB)).evals(run_id)]
+
+
+def test_merging_the_runs_finished_elsewhere_gives_the_report_of_the_whole_study(finished, tmp_path):
+  dest = str(tmp_path / "m")
+  shutil.copytree(finished, dest)
+  gone = {cid: _forget(dest, cid, stopped=True) for cid in UNFINISHED}
+  gone[NO_FOLDER] = _forget(dest, NO_FOLDER, stopped=False)
+  assert merge(dest, finished) == sorted(gone)
+  full, merged = read_cells(finished), read_cells(dest)
+  assert all(c["status"] == "done" for c in merged.values())
+  for cid, run_id in gone.items():
+    assert run_id_in(cell_folder_of(dest, cid)) == run_id
+    assert _evals(dest, run_id) == _evals(finished, run_id) and len(_evals(dest, run_id)) > 0
+    before = [] if cid == NO_FOLDER else [{"started": 1.0, "ended": None, "rc": None, "stopped": True,
+                                           "error": "the study stopped"}]
+    assert merged[cid]["attempts"] == before + full[cid]["attempts"]
+    rows = [a for a in ExperimentDB(os.path.join(dest, STUDY_DB)).attempts("m") if a["cell"] == cid]
+    assert [a["attempt"] for a in rows] == list(range(len(before) + 1, len(merged[cid]["attempts"]) + 1))
+  assert merge(dest, finished) == []  # nothing left to merge
+  report = lambda folder: [line for line in open(write_report(folder, "cmd")) if line.startswith("|")]  # noqa: E731
+  assert report(dest) == report(finished)
+
+
+def test_a_folder_of_another_study_is_refused(finished, tmp_path, capsys):
+  other = str(tmp_path / "other")
+  shutil.copytree(finished, other)
+  text = open(os.path.join(other, "study.yaml")).read()
+  open(os.path.join(other, "study.yaml"), "w").write(text.replace("name: m", "name: other", 1))
+  assert merge_main([finished, other]) == 2
+  assert "holds study 'other'" in capsys.readouterr().err
+  assert merge_main([finished, str(tmp_path / "nothing")]) == 2

@@ -1,0 +1,69 @@
+"""`python -m train.study merge DEST SRC [SRC ...]`: the finished runs of other folders of the same
+study (its runs made on other machines, or the study continued elsewhere) into DEST: each run done
+in SRC and not in DEST (or marked done there without its run folder: a folder that came back without
+its ignored files) brings its run folder, its database rows, its attempts (after DEST's own)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import sys
+
+from train.db import ExperimentDB
+from train.study.executor import STATE, STUDY_DB, StudyState, cell_folder_of, read_cells, run_id_in
+from train.study.results import SPEC_FILE
+from train.study.spec import load_study
+
+
+def _study_name(folder: str) -> str:
+  """The name in STUDY/study.yaml; FileNotFoundError if the folder holds no study."""
+  return load_study(os.path.join(folder, SPEC_FILE)).name
+
+
+def _merge_cell(dest: str, src: str, name: str, cid: str, dest_cells: dict, src_cells: dict) -> None:
+  """One cell: run folder, database rows and attempts from SRC; DEST's state marks it done."""
+  src_run, dest_run = cell_folder_of(src, cid), cell_folder_of(dest, cid)
+  if os.path.isdir(src_run):
+    shutil.rmtree(dest_run, ignore_errors=True)
+    shutil.copytree(src_run, dest_run)
+  run_id, db = run_id_in(src_run), ExperimentDB(os.path.join(dest, STUDY_DB))
+  if run_id is not None:
+    db.import_runs(os.path.join(src, STUDY_DB), dest_run, only=[run_id])
+  base = [] if dest_cells[cid]["status"] == "done" else dest_cells[cid]["attempts"]  # done: SRC's record
+  before = len(base)
+  for row in ExperimentDB(os.path.join(src, STUDY_DB)).attempts(name):
+    if row["cell"] == cid:
+      db.log_attempt(name, cid, before + row["attempt"], row, row["run_id"])
+  dest_cells[cid] = {"status": "done", "attempts": base + src_cells[cid]["attempts"]}
+
+
+def merge(dest: str, src: str) -> list[str]:
+  """Merges SRC's done runs that DEST lists and has not done (or has no run folder of); returns
+  their cell ids."""
+  name = _study_name(dest)
+  if _study_name(src) != name:
+    raise ValueError(f"{src} holds study {_study_name(src)!r}, {dest} holds {name!r}")
+  dest_cells, src_cells = read_cells(dest), read_cells(src)
+  ids = [cid for cid, c in src_cells.items()
+         if c["status"] == "done" and cid in dest_cells
+         and (dest_cells[cid]["status"] != "done" or run_id_in(cell_folder_of(dest, cid)) is None)]
+  for cid in ids:
+    _merge_cell(dest, src, name, cid, dest_cells, src_cells)
+  StudyState(os.path.join(dest, STATE), dest_cells).save()
+  return ids
+
+
+def main(argv: list[str]) -> int:
+  p = argparse.ArgumentParser(prog="python -m train.study merge", description=__doc__.splitlines()[0])
+  p.add_argument("dest", help="the study folder that receives the runs")
+  p.add_argument("src", nargs="+", help="folders of the same study")
+  args = p.parse_args(argv)
+  for src in args.src:
+    try:
+      ids = merge(args.dest, src)
+    except (FileNotFoundError, ValueError) as e:
+      print(f"error: {e}", file=sys.stderr)
+      return 2
+    print(f"{src}: {len(ids)} runs merged into {args.dest}" + "".join(f"\n  {i}" for i in ids))
+  return 0
