@@ -40,6 +40,11 @@ def test_overrides_apply_and_are_typed():
     ("physics.timestep=0.3", "physics.timestep"),
     ("control.period=0.255", "control.period: must be a multiple"),
     ("reward.cog_scale", "expected KEY=VALUE"),
+    ("control.dof_curriculum=[[arm, 0.5]]", "control.dof_curriculum: 'arm' is not a joint dimension"),
+    ("control.dof_curriculum=[[v, 0.5]]", "control.dof_curriculum: 'v' is not a joint dimension"),
+    ("control.dof_curriculum=[[front, 0.2], [front, 0.4]]", "control.dof_curriculum: 'front' must appear once"),
+    ("control.dof_curriculum=[[rear, 1.5]]", "control.dof_curriculum: 'rear' must appear once with an eps in"),
+    ("control.dof_curriculum=[[rear]]", "control.dof_curriculum[0]: must have 2 entries"),
 ])
 def test_bad_values_fail_naming_the_key(override, message):
   with pytest.raises(ConfigError, match=message.replace("[", r"\[")):

@@ -61,3 +61,25 @@ def test_bad_modes_fail_clearly():
     Controller.create(ABSOLEM, "5dof_stairs")
   with pytest.raises(ValueError, match="v_range"):
     Controller.create(JAGUAR, "4dof", v_range=(0.0, 3.0))
+
+
+DOF = (("front", 0.3), ("rear", 0.3), ("arm_1", 0.6), ("arm_2", 0.6))  # flippers, then the arm
+
+
+@pytest.mark.parametrize("increments", [True, False])
+def test_the_dof_curriculum_holds_locked_joints_at_their_targets_until_eps_reaches_them(increments):
+  staged = Controller.create(JAGUAR, "5dof_stairs", increments, dof_curriculum=DOF)
+  free = Controller.create(JAGUAR, "5dof_stairs", increments)
+  prev = jnp.array([0.1, 0.1, -0.2, -0.2, 0.3, -0.4])  # front l/r, rear l/r, arm 1/2 (rad)
+  action = jnp.array([0.2, 0.5, -0.7, 0.9, -0.3])  # v, front, rear, arm_1, arm_2
+  _, _, moved = free.decode(action, prev)
+  flippers, arm = slice(0, 4), slice(4, 6)
+  assert not np.allclose(moved[flippers], prev[flippers]) and not np.allclose(moved[arm], prev[arm])
+  for eps, acting in ((0.0, ()), (0.29, ()), (0.3, (flippers,)), (0.59, (flippers,)), (0.6, (flippers, arm)),
+                      (1.0, (flippers, arm))):
+    v, w, t = staged.decode(action, prev, jnp.float32(eps))
+    assert float(v) == pytest.approx(0.6) and float(w) == 0.0  # v always acts
+    expected = np.asarray(prev).copy()
+    for part in acting:
+      expected[part] = np.asarray(moved)[part]
+    np.testing.assert_allclose(t, expected, atol=1e-6, err_msg=f"eps {eps}")

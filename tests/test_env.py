@@ -232,3 +232,28 @@ def test_bad_task_settings_fail_clearly():
   from mjx_tracks.envs.config import ConfigError
   with pytest.raises(ConfigError, match="arm"):
     mjx_tracks.load("asc-inc-cog", ["robot=2"])
+
+
+def test_the_step_hands_the_curriculum_eps_of_its_state_to_the_dof_curriculum():
+  """Traced (no compilation): the controller decodes each action at the eps in the state's info."""
+  core = mjx_tracks.load("asc-inc-cog", ["control.dof_curriculum=[[front, 0.3], [arm_1, 0.6]]"])
+  real, seen = core.controller, []
+  assert real.unlock.tolist() == pytest.approx([0.0, 0.3, 0.0, 0.6, 0.0])  # v, front, rear, arm_1, arm_2
+
+  class Spy:
+    def __getattr__(self, name):
+      return getattr(real, name)
+
+    def decode(self, action, prev, eps=None):
+      seen.append(eps)
+      return real.decode(action, prev, eps)
+
+  core.controller = Spy()
+
+  def step(state, eps):
+    core.step(state.replace(info={**state.info, "eps": eps}), jnp.zeros(core.action_size))
+    assert len(seen) == 1 and seen[0] is eps
+    return eps
+
+  s = jax.eval_shape(core.reset_at, jax.random.PRNGKey(0), jnp.float32(0.4), jnp.float32(1.0))
+  jax.eval_shape(step, s, jax.ShapeDtypeStruct((), jnp.float32))

@@ -59,11 +59,17 @@ class ControlConfig:
   increments: bool  # the original's +-pi/10 increments, else absolute targets
   v_range: tuple[float, float]  # m/s
   period: float = dataclasses.field(metadata=bound(0.01, 2.0))  # s between actions
+  dof_curriculum: tuple[tuple[str, float], ...]  # (joint action dimension, eps from which it acts)
 
   def validate(self, key: str) -> None:
     from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
     require(self.mode in CONTROL_MODES, f"{key}.mode", f"must be one of {sorted(CONTROL_MODES)}, got {self.mode!r}")
     require(self.v_range[0] < self.v_range[1], f"{key}.v_range", "needs min < max")
+    from mjx_tracks.sim.control import unlock_values  # noqa: PLC0415
+    try:
+      unlock_values(CONTROL_MODES[self.mode], self.dof_curriculum)
+    except ValueError as e:
+      require(False, f"{key}.dof_curriculum", str(e).partition(": ")[2])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -310,7 +316,8 @@ def available_tasks() -> list[str]:
 
 # keys added since runs were first recorded -> the value that reproduces what those runs ran
 ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  # before culling: every contact
-              ("evaluation", "held_out"): []}  # before the evaluation suite: none
+              ("evaluation", "held_out"): [],  # before the evaluation suite: none
+              ("control", "dof_curriculum"): []}  # before the DOF curriculum: every dimension acts
 
 
 def _with_added_keys(raw: dict) -> dict:

@@ -67,7 +67,7 @@ class TrackedRobotEnv(Env):
       raise ConfigError(f"observation.parts: 'arm' needs a robot with an arm; robot {cfg.robot} has none")
     try:
       self.controller = Controller.create(self.robot, cfg.control.mode, cfg.control.increments,
-                                          cfg.control.v_range)
+                                          cfg.control.v_range, cfg.control.dof_curriculum)
     except ValueError as e:
       raise ConfigError(f"control: {e}") from e
     self.scene = make_scene(cfg.scene)
@@ -103,7 +103,7 @@ class TrackedRobotEnv(Env):
   def step(self, state: State, action: jax.Array) -> State:
     es: EnvState = state.pipeline_state
     m = self.sim.with_boxes(es.scene.box_pos, es.scene.box_size)
-    v, w, targets = self.controller.decode(action, es.targets)
+    v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
     data = self.sim.advance(m, es.data, self.controller.belt_speeds(v, w), targets, self.substeps)
     data = self._sense(m, data)
     # a physics blow-up ends the episode and keeps the last finite state

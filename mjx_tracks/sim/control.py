@@ -5,7 +5,10 @@ Actions are normalized to [-1, 1] per dimension (NaN -> 0, then clipped) and map
   w     yaw rate, onto [-max_yaw_rate, max_yaw_rate] rad/s
   joint absolute target: onto [lower, upper] limit (rad);
         increment: onto [-INCREMENT, INCREMENT] rad, accumulated into the previous target
-Joint targets are always clipped to the joint limits. Belt speeds follow the reference's
+Joint targets are always clipped to the joint limits. With a DOF curriculum (`unlock`), an action
+dimension acts only once the curriculum's eps reaches its unlock value; until then its joints hold
+their previous targets (the paper's conclusion: start with v, w, add flippers, then the arm).
+Belt speeds follow the reference's
 skid-steer relation u = v -+ w S / (2 e) (left, right), flipper belts as their side, clipped to
 +-max_speed.
 """
@@ -48,10 +51,13 @@ class Controller:
   track_separation: float  # m
   steering_efficiency: float
   max_speed: float  # m/s
+  unlock: np.ndarray  # (n_action,) eps from which each action dimension acts (0: always)
 
   @staticmethod
   def create(robot: RobotSpec, mode: str, increments: bool = True,
-             v_range: tuple[float, float] = (0.0, 1.0)) -> "Controller":
+             v_range: tuple[float, float] = (0.0, 1.0),
+             dof_curriculum: tuple[tuple[str, float], ...] = ()) -> "Controller":
+    """dof_curriculum: (joint action dimension, eps from which it acts) pairs; the others always act."""
     if mode not in CONTROL_MODES:
       raise ValueError(f"unknown control mode {mode!r}; known: {sorted(CONTROL_MODES)}")
     dims = CONTROL_MODES[mode]
@@ -67,7 +73,7 @@ class Controller:
         drive[robot.joint_index(name), a] = 1.0
     return Controller(mode, dims, drive, robot.joint_limits(), tuple(v_range), robot.max_yaw_rate,
                       increments, robot.track_separation, robot.steering_efficiency,
-                      robot.max_speed)
+                      robot.max_speed, unlock_values(dims, dof_curriculum))
 
   @property
   def action_size(self) -> int:
@@ -76,14 +82,16 @@ class Controller:
   def _dim(self, action: jax.Array, name: str, default: float = 0.0) -> jax.Array:
     return action[self.dims.index(name)] if name in self.dims else jnp.asarray(default)
 
-  def decode(self, action: jax.Array, prev_targets: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """Normalized action -> (v m/s, w rad/s, joint targets rad)."""
+  def decode(self, action: jax.Array, prev_targets: jax.Array,
+             eps: jax.Array = 1.0) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Normalized action at curriculum difficulty eps -> (v m/s, w rad/s, joint targets rad)."""
     a = jnp.clip(jnp.where(jnp.isfinite(action), action, 0.0), -1.0, 1.0)
     lo, hi = self.v_range
     v = lo + (self._dim(a, "v", -1.0) + 1.0) * 0.5 * (hi - lo)
     w = self._dim(a, "w") * self.max_yaw_rate
     drive = jnp.asarray(self.drive)
-    driven = drive.sum(axis=1) > 0
+    acting = jnp.asarray(eps) >= jnp.asarray(self.unlock)  # (n_action,)
+    driven = drive @ acting.astype(jnp.float32) > 0  # joints of the dimensions that act
     cmd = drive @ a
     lim_lo, lim_hi = jnp.asarray(self.joint_limits[:, 0]), jnp.asarray(self.joint_limits[:, 1])
     if self.increments:
@@ -96,6 +104,19 @@ class Controller:
   def belt_speeds(self, v: jax.Array, w: jax.Array) -> jax.Array:
     """(v, w) -> speeds of the 6 belts (m/s): left/right tracks, then the four flippers."""
     return command_belt_speeds(v, w, self.track_separation, self.steering_efficiency, self.max_speed)
+
+
+def unlock_values(dims: tuple[str, ...], dof_curriculum: tuple[tuple[str, float], ...]) -> np.ndarray:
+  """(n_action,) unlock eps per action dimension; ValueError on a name the mode lacks, v / w, or a repeat."""
+  unlock = np.zeros(len(dims), np.float32)
+  names = [name for name, _ in dof_curriculum]
+  for name, eps in dof_curriculum:
+    if name not in dims or name in ("v", "w"):
+      raise ValueError(f"dof_curriculum: {name!r} is not a joint dimension of {dims}")
+    if names.count(name) > 1 or not 0.0 <= eps <= 1.0:
+      raise ValueError(f"dof_curriculum: {name!r} must appear once with an eps in [0, 1], got {eps}")
+    unlock[dims.index(name)] = eps
+  return unlock
 
 
 def command_belt_speeds(v, w, track_separation: float, steering_efficiency: float,
