@@ -125,3 +125,31 @@ def test_the_default_cluster_pins_one_worker_per_gpu_and_counts_slots_as_resourc
   assert specs["gpu3"]["options"]["resources"] == {"gpu": 2} and specs["gpu3"]["options"]["nthreads"] == 2
   assert specs["cpu"]["options"]["env"]["JAX_PLATFORMS"] == "cpu" and specs["cpu"]["options"]["resources"] == {"cpu": 4}
   assert "cpu" not in worker_specs(["0"], 1, 0)
+
+
+class _RecordingClient:
+  """Records what the runner submits (no cluster)."""
+
+  def __init__(self):
+    self.calls = []
+
+  def submit(self, fn, *args, **kwargs):
+    self.calls.append(args)
+
+
+def test_a_run_whose_evaluation_failed_is_evaluated_again_even_after_a_stopped_attempt(tmp_path):
+  """Its training finished, evaluating failed, and the study was stopped during the retry: the
+  next start evaluates it again instead of training a finished run (which train.run refuses)."""
+  spec, folder = study_from_dict(STUDY), str(tmp_path / "study")
+  cid = cells(spec)[0].id
+  runner = StudyRunner(spec, folder, _RecordingClient(), COMMANDS, backends=("cpu",))
+  os.makedirs(os.path.join(cell_folder(folder, cells(spec)[0]), "checkpoints", "400"))
+  runner.state.cells[cid]["attempts"] = [
+      {"started": 1.0, "ended": 2.0, "rc": 2, "phase": "evaluate"},
+      {"started": 3.0, "ended": None, "rc": None, "phase": None, "stopped": True}]
+  runner._submit(cid)
+  _, _, resume, train, _ = runner.client.calls[-1]
+  assert resume is not None and train is False
+  runner.state.cells[cid]["attempts"][0]["phase"] = "train"  # training itself failed: train again
+  runner._submit(cid)
+  assert runner.client.calls[-1][3] is True

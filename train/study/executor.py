@@ -122,11 +122,11 @@ class StudyRunner:
   def _submit(self, cid: str):
     cell, record = self.cells[cid], self.state.cells[cid]
     local = cell_folder(self.folder, cell)
-    last = record["attempts"][-1] if record["attempts"] else None
+    ended = [a for a in record["attempts"] if a.get("phase")]  # not those the study's own stop cut off
     ckpts = os.path.join(local, "checkpoints")
     has_run = os.path.isdir(ckpts) and bool(os.listdir(ckpts))
     resume = pack(local) if has_run else None
-    train = not (last and last.get("phase") == "evaluate" and has_run)  # training finished: evaluate again only
+    train = not (ended and ended[-1]["phase"] == "evaluate" and has_run)  # training finished: evaluate again only
     record["status"] = "running"
     record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
     eval_args = ["--suite", "--trials", str(self.spec.eval_trials)] + (["--milestones"] if cell.milestones else [])
