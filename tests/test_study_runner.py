@@ -139,7 +139,8 @@ class _RecordingClient:
 
 def test_a_run_whose_evaluation_failed_is_evaluated_again_even_after_a_stopped_attempt(tmp_path):
   """Its training finished, evaluating failed, and the study was stopped during the retry: the
-  next start evaluates it again instead of training a finished run (which train.run refuses)."""
+  next start evaluates it again instead of training a finished run (which train.run refuses); so
+  does any start once its checkpoints reach its total steps."""
   spec, folder = study_from_dict(STUDY), str(tmp_path / "study")
   cid = cells(spec)[0].id
   runner = StudyRunner(spec, folder, _RecordingClient(), COMMANDS, backends=("cpu",))
@@ -153,3 +154,6 @@ def test_a_run_whose_evaluation_failed_is_evaluated_again_even_after_a_stopped_a
   runner.state.cells[cid]["attempts"][0]["phase"] = "train"  # training itself failed: train again
   runner._submit(cid)
   assert runner.client.calls[-1][3] is True
+  json.dump({"total_steps": 400}, open(os.path.join(cell_folder(folder, cells(spec)[0]), "run.json"), "w"))
+  runner._submit(cid)  # ... unless its checkpoints reach its total steps
+  assert runner.client.calls[-1][3] is False

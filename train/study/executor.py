@@ -37,6 +37,13 @@ def run_id_in(run_folder: str) -> str | None:
   return json.load(open(path)).get("run_id") if os.path.exists(path) else None
 
 
+def _trained_to_the_end(run_folder: str) -> bool:
+  """Whether the run's newest checkpoint is at its total steps (train.run refuses to resume it)."""
+  from train.checkpoints import saved_steps  # noqa: PLC0415  (JAX: only where a run came back)
+  path, steps = os.path.join(run_folder, "run.json"), saved_steps(run_folder)
+  return bool(steps) and os.path.exists(path) and steps[-1] >= json.load(open(path))["total_steps"]
+
+
 def read_cells(folder: str) -> dict:
   """STUDY/state.json's cells as last saved; FileNotFoundError if the folder holds no study."""
   return json.load(open(os.path.join(folder, STATE)))["cells"]
@@ -126,7 +133,8 @@ class StudyRunner:
     ckpts = os.path.join(local, "checkpoints")
     has_run = os.path.isdir(ckpts) and bool(os.listdir(ckpts))
     resume = pack(local) if has_run else None
-    train = not (ended and ended[-1]["phase"] == "evaluate" and has_run)  # training finished: evaluate again only
+    evaluated = bool(ended) and ended[-1]["phase"] == "evaluate"  # training finished (or stopped early)
+    train = not (has_run and (evaluated or _trained_to_the_end(local)))  # else evaluate again only
     record["status"] = "running"
     record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
     eval_args = ["--suite", "--trials", str(self.spec.eval_trials)] + (["--milestones"] if cell.milestones else [])
