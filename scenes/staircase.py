@@ -1,7 +1,8 @@
 """A straight staircase as a fixed pool of step boxes whose poses and sizes come from xi = (l, h, n).
 
-One compiled model holds N_MAX step boxes. Each environment places and sizes them from its own
-xi, so one batched step call simulates as many different staircases as there are environments.
+One compiled model holds a pool of step boxes, as many as the task's longest staircase (up to
+MAX_STEPS). Each environment places and sizes them from its own xi, so one batched step call
+simulates as many different staircases as there are environments.
 Step k (0-based, k < n - 1) is a block x in [k l, (k+1) l], z in [0, (k+1) h]; the top step is the
 landing, x in [(n-1) l, (n-1) l + LANDING_LENGTH], z in [0, n h]; unused boxes are parked far
 below the floor. The first riser is at x = 0; the stairs rise toward +x.
@@ -21,7 +22,8 @@ from scenes.samplers import Ranges
 from scenes.scene import SceneState
 from scenes.world import SCENE_BOX, world_geom_attrs
 
-N_MAX = 7  # steps in the pool (the reference's n_max)
+N_MAX = 7  # the reference's n_max: the paper's longest staircase (the default pool)
+MAX_STEPS = 15  # the longest staircase (box pool) a task may ask for
 WIDTH = 2.0  # m, between the side walls
 LANDING_LENGTH = 3.0  # m, top landing
 GOAL_PAST_EDGE = 1.0  # m, ascent goal past the top step edge; descent goal before the first step
@@ -106,7 +108,7 @@ def descent_spawn(stairs: Staircase) -> tuple[jax.Array, jax.Array]:
 
 STAIR_PARAMS = ("tread", "riser", "steps")  # xi = (l m, h m, n)
 STAIR_HARD = ("low", "high", "high")  # hardest: short treads, tall risers, many steps
-STAIR_LIMITS = ((0.1, 1.0), (0.01, 0.4), (1, N_MAX))  # what the generator supports (m, m, count)
+STAIR_LIMITS = ((0.1, 1.0), (0.01, 0.4), (1, MAX_STEPS))  # what the generator supports (m, m, count)
 
 
 def stair_ranges(tread: tuple[float, float], riser: tuple[float, float],
@@ -138,11 +140,16 @@ class StairScene:
     if self.ranges.names != STAIR_PARAMS:
       raise ValueError(f"stair ranges must be named {STAIR_PARAMS}")
     lo, hi = self.ranges.low, self.ranges.high
-    if not (lo[0] > 0 and lo[1] > 0 and 1 <= lo[2] and hi[2] <= N_MAX):
-      raise ValueError(f"stair ranges need tread, riser > 0 and 1 <= steps <= {N_MAX}")
+    if not (lo[0] > 0 and lo[1] > 0 and 1 <= lo[2] and hi[2] <= MAX_STEPS):
+      raise ValueError(f"stair ranges need tread, riser > 0 and 1 <= steps <= {MAX_STEPS}")
+
+  @property
+  def n_boxes(self) -> int:
+    """The box pool: the task's longest staircase."""
+    return int(self.ranges.high[2])
 
   def world_xml(self) -> str:
-    return world_xml(N_MAX)
+    return world_xml(self.n_boxes)
 
   def stairs(self, xi: jax.Array) -> Staircase:
     return Staircase(tread=xi[0], riser=xi[1], steps=xi[2].astype(jnp.int32))
@@ -152,7 +159,7 @@ class StairScene:
     k_xi, k_y, k_yaw, k_gy, k_gx = jax.random.split(key, 5)
     xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant)
     st = self.stairs(xi)
-    pos, size = step_boxes(st)
+    pos, size = step_boxes(st, self.n_boxes)
     up = self.direction == "up"
     spawn, yaw = ascent_spawn(st) if up else descent_spawn(st)
     goal = ascent_goal(st) if up else descent_goal(st)

@@ -34,7 +34,7 @@ def test_overrides_apply_and_are_typed():
     ("rewards.cog_scale=0.5", "rewards: unknown key"),
     ("reward.cog_scale=abc", "reward.cog_scale: must be a number"),
     ("episode.max_steps=2.5", "episode.max_steps: must be an integer"),
-    ("scene.steps=[1, 9]", "scene.steps: needs 1 <= min <= max <= 7"),
+    ("scene.steps=[1, 16]", "scene.steps: needs 1 <= min <= max <= 15"),
     ("control.mode=3dof", "control.mode: must be one of"),
     ("scene.curriculum.rule=median", "scene.curriculum.rule"),
     ("physics.timestep=0.3", "physics.timestep"),

@@ -13,6 +13,7 @@ from mjx_tracks.envs.config import default_config, load_config
 from mjx_tracks.envs.task_env import make_scene
 from scenes.navigation import AREA_W
 from scenes.staircase import LANDING_LENGTH
+from scenes.world import SCENE_BOX
 
 
 def _stairs(**kw):
@@ -116,3 +117,39 @@ def test_navigation_kinds_are_equally_likely_and_leave_a_gap():
   assert (w1[zig] >= AREA_W / 2 - c[zig] / 2 - 1e-4).all() and (AREA_W - w1[zig] >= c[zig] - 1e-4).all()
   # zigzag walls jut from alternating sides and together span at least W - C of the width
   assert (w1[zig] + w2[zig] >= AREA_W - c[zig] - 1e-4).all()
+
+
+def test_a_long_staircase_task_sizes_its_box_pool_and_places_every_step():
+  """Up to 15 steps (the pool sized by the task, 7 for the paper's): boxes against the C model
+  built from xi, and rays straight down over each tread (MJX ray) hitting its height."""
+  from scenes.staircase import MAX_STEPS
+  assert _stairs().n_boxes == 7 and MAX_STEPS == 15
+  scene = _stairs(steps=(10, 15))
+  assert scene.n_boxes == 15
+  dof = '<body pos="0 0 -30"><joint type="slide"/><geom size=".01" contype="0" conaffinity="0"/></body>'  # MJX needs one
+  xml = f'<mujoco><asset><material name="world"/></asset><worldbody>{scene.world_xml()}{dof}</worldbody></mujoco>'
+  c_model = mujoco.MjModel.from_xml_string(xml)
+  boxes = np.array([mujoco.mj_name2id(c_model, mujoco.mjtObj.mjOBJ_GEOM, f"{SCENE_BOX}{k}") for k in range(15)])
+  assert (boxes >= 0).all()
+  m = mjx.put_model(c_model, impl="jax")
+
+  @jax.jit
+  def one(key):
+    s = scene.sample(key, 0.0)
+    mm = m.replace(geom_pos=m.geom_pos.at[boxes].set(s.box_pos), geom_size=m.geom_size.at[boxes].set(s.box_size))
+    d = mjx.kinematics(mm, mjx.make_data(mm, impl="jax"))
+    xs = (jnp.arange(15) + 0.5) * s.xi[0]
+    rays = jax.vmap(lambda x: mjx.ray(mm, d, jnp.array([x, 0.3, 5.0]), jnp.array([0.0, 0, -1]))[0])(xs)
+    return s, rays
+
+  lengths = set()
+  for key in jax.random.split(jax.random.PRNGKey(3), 6):
+    s, rays = one(key)
+    l, h, n = float(s.xi[0]), float(s.xi[1]), int(s.xi[2])
+    lengths.add(n)
+    c, d = _c_model_from_xi(l, h, n)
+    np.testing.assert_allclose(np.asarray(s.box_pos[:n]), d.geom_xpos, atol=1e-5)
+    np.testing.assert_allclose(np.asarray(s.box_size[:n]), c.geom_size, atol=1e-5)
+    assert (np.asarray(s.box_pos[n:, 2]) < -5).all()
+    np.testing.assert_allclose(np.asarray(rays[:n]), 5.0 - (np.arange(n) + 1) * h, atol=1e-4)
+  assert 10 <= min(lengths) and max(lengths) <= 15 and len(lengths) > 1
