@@ -37,7 +37,7 @@ def train(argv: list[str]) -> int:
     meta = json.load(open(meta_path))
   else:
     meta = {"run_id": f"{a.task}-s{a.seed}-{time.time_ns()}", "task": a.task, "seed": int(a.seed),
-            "steps": int(a.steps), "sessions": 0, "milestones": [int(m) for m in (a.milestones or "").split(",") if m]}
+            "steps": int(a.steps), "total_steps": int(a.steps), "sessions": 0, "milestones": [int(m) for m in (a.milestones or "").split(",") if m]}
   meta["sessions"] += 1
   db = ExperimentDB(a.db)
   db.start(meta["run_id"], meta["task"], "ppo", "cpu", meta["seed"], {}, out, meta["steps"])

@@ -103,8 +103,8 @@ def test_held_out_scenes_pin_their_staircase_and_bad_ones_are_named():
   assert suite_scenes(cfg) == ["hardest", "uniform", "held-out/low"] and suite_scenes(load_config("nav")) == ["uniform"]
   with pytest.raises(ConfigError, match="names \\['low'\\]"):
     scene_config(cfg, "held-out/high")
-  with pytest.raises(ConfigError, match=r"evaluation.held_out\[0\].steps: must be in \[1, 7\]"):
-    load_config("asc-inc-cog", ["evaluation.held_out=[{name: x, tread: 0.5, riser: 0.12, steps: 9}]"])
+  with pytest.raises(ConfigError, match=r"evaluation.held_out\[0\].steps: must be in \[1, 15\]"):
+    load_config("asc-inc-cog", ["evaluation.held_out=[{name: x, tread: 0.5, riser: 0.12, steps: 16}]"])
   with pytest.raises(ConfigError, match="names repeat"):
     load_config("asc-inc-cog", ["evaluation.held_out=[{name: x, tread: 0.5, riser: 0.1, steps: 2}, "
                                 "{name: x, tread: 0.4, riser: 0.1, steps: 2}]"])

@@ -67,26 +67,43 @@ def parse_stairs(text: str) -> sc.Staircase:
   return sc.Staircase(jnp.float32(l), jnp.float32(h), jnp.int32(n))
 
 
-def scripted_rollout(setup: DriveSetup, n_steps: int) -> np.ndarray:
-  """Runs the scripted controller for n_steps control periods; returns qpos (n_steps + 1, nq)."""
+CONTROLLERS = ("scripted", "full")  # StairScript; full belt speed with the joints held at 0
+
+
+def scripted_rollouts(setup: DriveSetup, n_steps: int, controller: str = "scripted") -> np.ndarray:
+  """One rollout of n_steps control periods per staircase of setup.stairs (fields with a batch axis
+  B); returns qpos (B, n_steps + 1, nq). The robot stops at the goal."""
+  if controller not in CONTROLLERS:
+    raise ValueError(f"controller must be one of {CONTROLLERS}, got {controller!r}")
   sim, robot = setup.sim, setup.sim.robot
   script = StairScript(setup.direction)
-  m = setup.model()
-  goal_x = setup.goal()[0]
   ahead = 1.0 if setup.direction == "up" else -1.0  # +x is up the stairs
 
-  def control_step(d, _):
-    nose_up = -chassis_rpy(d.qpos)[1]
-    speed, targets = script.command(robot, nose_up)
-    speed = jnp.where(ahead * (d.qpos[0] - goal_x) >= 0.0, 0.0, speed)  # stop at the goal
-    belts = command_belt_speeds(speed, 0.0, robot.track_separation, robot.steering_efficiency,
-                                robot.max_speed)
-    d = sim.advance(m, d, belts, targets, setup.substeps)
-    return d, d.qpos
+  def one(stairs: sc.Staircase) -> jax.Array:
+    s = dataclasses.replace(setup, stairs=stairs)
+    m, goal_x = s.model(), s.goal()[0]
 
-  d0 = setup.initial_data()
-  _, qpos = jax.jit(lambda d: jax.lax.scan(control_step, d, None, length=n_steps))(d0)
-  return np.concatenate([np.asarray(d0.qpos)[None], np.asarray(qpos)], axis=0)
+    def control_step(d, _):
+      speed, targets = script.command(robot, -chassis_rpy(d.qpos)[1])  # from the nose-up angle
+      if controller == "full":
+        speed, targets = robot.max_speed, jnp.zeros_like(targets)
+      speed = jnp.where(ahead * (d.qpos[0] - goal_x) >= 0.0, 0.0, speed)  # stop at the goal
+      belts = command_belt_speeds(speed, 0.0, robot.track_separation, robot.steering_efficiency,
+                                  robot.max_speed)
+      d = sim.advance(m, d, belts, targets, s.substeps)
+      return d, d.qpos
+
+    d0 = s.initial_data()
+    _, qpos = jax.lax.scan(control_step, d0, None, length=n_steps)
+    return jnp.concatenate([d0.qpos[None], qpos], axis=0)
+
+  return np.asarray(jax.jit(jax.vmap(one))(setup.stairs))
+
+
+def scripted_rollout(setup: DriveSetup, n_steps: int) -> np.ndarray:
+  """The scripted controller on setup's one staircase; qpos (n_steps + 1, nq)."""
+  batch = jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], setup.stairs)
+  return scripted_rollouts(dataclasses.replace(setup, stairs=batch), n_steps)[0]
 
 
 def summarize(setup: DriveSetup, qpos: np.ndarray) -> dict:

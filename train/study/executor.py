@@ -41,7 +41,8 @@ def _trained_to_the_end(run_folder: str) -> bool:
   """Whether the run's newest checkpoint is at its total steps (train.run refuses to resume it)."""
   from train.checkpoints import saved_steps  # noqa: PLC0415  (JAX: only where a run came back)
   path, steps = os.path.join(run_folder, "run.json"), saved_steps(run_folder)
-  return bool(steps) and os.path.exists(path) and steps[-1] >= json.load(open(path))["total_steps"]
+  total = json.load(open(path)).get("total_steps") if os.path.exists(path) else None
+  return bool(steps) and total is not None and steps[-1] >= total
 
 
 def read_cells(folder: str) -> dict:
