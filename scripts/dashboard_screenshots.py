@@ -1,5 +1,5 @@
 """Screenshots of every dashboard page (docs/screenshots/) served over a copy of a real experiment
-database, by default the partial GPU study committed in results/studies/paper-ppo-part, plus one
+database, by default the paper study committed in results/studies/paper, plus one
 tiny CPU run launched from the form and run by the server's launcher (a local Dask cluster, the
 real train.run and train.evaluate) for the queue: the system Chromium driven by Playwright,
 headless. Usage: python scripts/dashboard_screenshots.py [--db PATH] [--out DIR]"""
@@ -71,7 +71,7 @@ def launch_tiny_run(base: str) -> None:
 
 def main() -> None:
   p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  p.add_argument("--db", default="results/studies/paper-ppo-part/study.sqlite")
+  p.add_argument("--db", default="results/studies/paper/study.sqlite")
   p.add_argument("--out", default="docs/screenshots")
   args = p.parse_args()
   from distributed import Client, LocalCluster  # noqa: PLC0415

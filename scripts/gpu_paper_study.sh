@@ -6,7 +6,7 @@
 # study folder (without checkpoints), its log and the logs of the attempts still running into
 # $OUT/paper-study.tgz every 30 s and at the end. Afterwards, anywhere:
 # `python -m train.study report paper --root DIR`.
-# FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper-ppo-part):
+# FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
 # its finished runs are skipped. A study still running when the machine goes back resumes the same
 # way from the last pack (its running attempts start again).
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.

@@ -62,10 +62,9 @@ class ControlConfig:
   dof_curriculum: tuple[tuple[str, float], ...]  # (joint action dimension, eps from which it acts)
 
   def validate(self, key: str) -> None:
-    from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
+    from mjx_tracks.sim.control import CONTROL_MODES, unlock_values  # noqa: PLC0415
     require(self.mode in CONTROL_MODES, f"{key}.mode", f"must be one of {sorted(CONTROL_MODES)}, got {self.mode!r}")
     require(self.v_range[0] < self.v_range[1], f"{key}.v_range", "needs min < max")
-    from mjx_tracks.sim.control import unlock_values  # noqa: PLC0415
     try:
       unlock_values(CONTROL_MODES[self.mode], self.dof_curriculum)
     except ValueError as e:

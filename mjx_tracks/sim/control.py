@@ -8,9 +8,8 @@ Actions are normalized to [-1, 1] per dimension (NaN -> 0, then clipped) and map
 Joint targets are always clipped to the joint limits. With a DOF curriculum (`unlock`), an action
 dimension acts only once the curriculum's eps reaches its unlock value; until then its joints hold
 their previous targets (the paper's conclusion: start with v, w, add flippers, then the arm).
-Belt speeds follow the reference's
-skid-steer relation u = v -+ w S / (2 e) (left, right), flipper belts as their side, clipped to
-+-max_speed.
+Belt speeds follow the reference's skid-steer relation u = v -+ w S / (2 e) (left, right),
+flipper belts as their side, clipped to +-max_speed.
 """
 
 from __future__ import annotations
