@@ -9,6 +9,7 @@ Usage (CPU is fine): cd scripts && python single_step_limit.py --out ../results/
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime
 import json
 import os
@@ -43,8 +44,8 @@ def outcomes(robot_name: str, direction: str, risers: np.ndarray, seconds: float
   for controller in CONTROLLERS:
     qpos = scripted_rollouts(setup, round(seconds / CONTROL_PERIOD), controller)
     out[controller] = [
-        {"riser_m": round(float(h), 3), **summarize(DriveSetup(sim, sc.Staircase(TREAD, float(h), 1), direction,
-                                                                CONTROL_PERIOD, defaults.episode.goal_tolerance), q)}
+        {"riser_m": round(float(h), 3),
+         **summarize(dataclasses.replace(setup, stairs=sc.Staircase(TREAD, float(h), 1)), q)}
         for h, q in zip(risers, qpos)]
   return out
 

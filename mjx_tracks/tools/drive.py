@@ -84,9 +84,10 @@ def scripted_rollouts(setup: DriveSetup, n_steps: int, controller: str = "script
     m, goal_x = s.model(), s.goal()[0]
 
     def control_step(d, _):
-      speed, targets = script.command(robot, -chassis_rpy(d.qpos)[1])  # from the nose-up angle
       if controller == "full":
-        speed, targets = robot.max_speed, jnp.zeros_like(targets)
+        speed, targets = robot.max_speed, jnp.zeros(sim.layout.n_joints)
+      else:
+        speed, targets = script.command(robot, -chassis_rpy(d.qpos)[1])  # from the nose-up angle
       speed = jnp.where(ahead * (d.qpos[0] - goal_x) >= 0.0, 0.0, speed)  # stop at the goal
       belts = command_belt_speeds(speed, 0.0, robot.track_separation, robot.steering_efficiency,
                                   robot.max_speed)

@@ -21,8 +21,10 @@ def _study_name(folder: str) -> str:
   return load_study(os.path.join(folder, SPEC_FILE)).name
 
 
-def _merge_cell(dest: str, src: str, name: str, cid: str, dest_cells: dict, src_cells: dict) -> None:
-  """One cell: run folder, database rows and attempts from SRC; DEST's state marks it done."""
+def _merge_cell(dest: str, src: str, name: str, cid: str, dest_cells: dict, src_cells: dict,
+                src_attempts: list[dict]) -> None:
+  """One cell: run folder, database rows and attempts (SRC's attempts table rows) from SRC; DEST's
+  state marks it done."""
   src_run, dest_run = cell_folder_of(src, cid), cell_folder_of(dest, cid)
   if os.path.isdir(src_run):
     shutil.rmtree(dest_run, ignore_errors=True)
@@ -32,7 +34,7 @@ def _merge_cell(dest: str, src: str, name: str, cid: str, dest_cells: dict, src_
     db.import_runs(os.path.join(src, STUDY_DB), dest_run, only=[run_id])
   base = [] if dest_cells[cid]["status"] == "done" else dest_cells[cid]["attempts"]  # done: SRC's record
   before = len(base)
-  for row in ExperimentDB(os.path.join(src, STUDY_DB)).attempts(name):
+  for row in src_attempts:
     if row["cell"] == cid:
       db.log_attempt(name, cid, before + row["attempt"], row, row["run_id"])
   dest_cells[cid] = {"status": "done", "attempts": base + src_cells[cid]["attempts"]}
@@ -48,8 +50,9 @@ def merge(dest: str, src: str) -> list[str]:
   ids = [cid for cid, c in src_cells.items()
          if c["status"] == "done" and cid in dest_cells
          and (dest_cells[cid]["status"] != "done" or run_id_in(cell_folder_of(dest, cid)) is None)]
+  src_attempts = ExperimentDB(os.path.join(src, STUDY_DB)).attempts(name)
   for cid in ids:
-    _merge_cell(dest, src, name, cid, dest_cells, src_cells)
+    _merge_cell(dest, src, name, cid, dest_cells, src_cells, src_attempts)
   StudyState(os.path.join(dest, STATE), dest_cells).save()
   return ids
 
