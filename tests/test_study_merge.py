@@ -24,6 +24,7 @@ STUDY = {"name": "m", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], 
          "compare": [["asc-inc-cog", "asc-uni-cog"]]}
 UNFINISHED = ("g/asc-inc-cog/200/s1", "g/asc-uni-cog/200/s1")  # stopped in DEST, finished in SRC
 NO_FOLDER = "g/asc-uni-cog/200/s0"  # done in DEST, but its run folder and rows did not come back
+STOPPED = {"started": 1.0, "ended": None, "rc": None, "stopped": True, "error": "the study stopped"}
 
 
 @pytest.fixture(scope="module")
@@ -47,8 +48,7 @@ def _forget(folder: str, cid: str, stopped: bool) -> str:
   path = os.path.join(folder, "state.json")
   state = json.load(open(path))
   if stopped:
-    state["cells"][cid] = {"status": "queued", "attempts": [{"started": 1.0, "ended": None, "rc": None,
-                                                             "stopped": True, "error": "the study stopped"}]}
+    state["cells"][cid] = {"status": "queued", "attempts": [dict(STOPPED)]}
   json.dump(state, open(path, "w"))
   return run_id
 
@@ -68,14 +68,31 @@ def test_merging_the_runs_finished_elsewhere_gives_the_report_of_the_whole_study
   for cid, run_id in gone.items():
     assert run_id_in(cell_folder_of(dest, cid)) == run_id
     assert _evals(dest, run_id) == _evals(finished, run_id) and len(_evals(dest, run_id)) > 0
-    before = [] if cid == NO_FOLDER else [{"started": 1.0, "ended": None, "rc": None, "stopped": True,
-                                           "error": "the study stopped"}]
+    before = [] if cid == NO_FOLDER else [STOPPED]
     assert merged[cid]["attempts"] == before + full[cid]["attempts"]
     rows = [a for a in ExperimentDB(os.path.join(dest, STUDY_DB)).attempts("m") if a["cell"] == cid]
     assert [a["attempt"] for a in rows] == list(range(len(before) + 1, len(merged[cid]["attempts"]) + 1))
   assert merge(dest, finished) == []  # nothing left to merge
   report = lambda folder: [line for line in open(write_report(folder, "cmd")) if line.startswith("|")]  # noqa: E731
   assert report(dest) == report(finished)
+
+
+def test_a_study_continued_from_a_copy_of_dest_brings_dests_attempts_once(finished, tmp_path):
+  dest, src, cid = str(tmp_path / "dest"), str(tmp_path / "src"), UNFINISHED[0]
+  shutil.copytree(finished, dest)
+  _forget(dest, cid, stopped=True)
+  shutil.copytree(finished, src)  # SRC began as DEST (its stopped attempt first), then finished the run
+  path = os.path.join(src, "state.json")
+  state = json.load(open(path))
+  own = state["cells"][cid]["attempts"]
+  state["cells"][cid]["attempts"] = [dict(STOPPED)] + own
+  json.dump(state, open(path, "w"))
+  with sqlite3.connect(os.path.join(src, STUDY_DB)) as c:
+    c.execute("UPDATE attempts SET attempt=attempt+1 WHERE cell=?", (cid,))
+  assert merge(dest, src) == [cid]
+  assert read_cells(dest)[cid]["attempts"] == [STOPPED] + own
+  rows = [a["attempt"] for a in ExperimentDB(os.path.join(dest, STUDY_DB)).attempts("m") if a["cell"] == cid]
+  assert rows == list(range(2, len(own) + 2))
 
 
 def test_a_folder_of_another_study_is_refused(finished, tmp_path, capsys):

@@ -1,7 +1,8 @@
 """`python -m train.study merge DEST SRC [SRC ...]`: the finished runs of other folders of the same
 study (its runs made on other machines, or the study continued elsewhere) into DEST: each run done
 in SRC and not in DEST (or marked done there without its run folder: a folder that came back without
-its ignored files) brings its run folder, its database rows, its attempts (after DEST's own)."""
+its ignored files) brings its run folder, its database rows, its attempts (after DEST's own, each once when SRC
+continued from a copy of DEST)."""
 
 from __future__ import annotations
 
@@ -32,7 +33,9 @@ def _merge_cell(dest: str, src: str, name: str, cid: str, dest_cells: dict, src_
   run_id, db = run_id_in(src_run), ExperimentDB(os.path.join(dest, STUDY_DB))
   if run_id is not None:
     db.import_runs(os.path.join(src, STUDY_DB), dest_run, only=[run_id])
-  base = [] if dest_cells[cid]["status"] == "done" else dest_cells[cid]["attempts"]  # done: SRC's record
+  in_src = {a.get("started") for a in src_cells[cid]["attempts"]}  # SRC continued from DEST: holds DEST's too
+  base = [] if dest_cells[cid]["status"] == "done" else [a for a in dest_cells[cid]["attempts"]
+                                                         if a.get("started") not in in_src]
   before = len(base)
   for row in src_attempts:
     if row["cell"] == cid:
