@@ -20,10 +20,10 @@ from flax import struct
 from scenes import samplers
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
+from scenes.terrain_kinds import MAX_STEPS, RISER_LIMITS, TREAD_LIMITS
 from scenes.world import SCENE_BOX, world_geom_attrs
 
 N_MAX = 7  # the reference's n_max: the paper's longest staircase (the default pool)
-MAX_STEPS = 15  # the longest staircase (box pool) a task may ask for
 WIDTH = 2.0  # m, between the side walls
 LANDING_LENGTH = 3.0  # m, top landing
 GOAL_PAST_EDGE = 1.0  # m, ascent goal past the top step edge; descent goal before the first step
@@ -66,19 +66,33 @@ def world_xml(n_max: int = N_MAX) -> str:
 
 def step_boxes(stairs: Staircase, n_max: int = N_MAX) -> tuple[jax.Array, jax.Array]:
   """Centres (n_max, 3) and half-sizes (n_max, 3) of the step boxes of one staircase (m)."""
-  k = jnp.arange(n_max)
-  l, h, n = stairs.tread, stairs.riser, stairs.steps
-  is_landing = k == n - 1
-  used = k < n
-  x0 = k * l
-  length = jnp.where(is_landing, LANDING_LENGTH, l)
-  top = (k + 1) * h
+  return boxes_from_treads(jnp.full((n_max,), stairs.tread), stairs.riser, stairs.steps)
+
+
+def tread_starts(treads: jax.Array) -> jax.Array:
+  """x (m) of each step's riser: the sum of the treads before it."""
+  return jnp.concatenate([jnp.zeros(1, treads.dtype), jnp.cumsum(treads)[:-1]])
+
+
+def boxes_from_treads(treads: jax.Array, riser: jax.Array, steps: jax.Array) -> tuple[jax.Array, jax.Array]:
+  """Boxes (centres, half-sizes; (len(treads), 3), m) of a staircase whose step k < steps - 1 has
+  tread treads[k] and top (k + 1) riser; step steps - 1 is the landing; the rest are parked."""
+  k = jnp.arange(treads.shape[0])
+  is_landing = k == steps - 1
+  used = k < steps
+  x0 = tread_starts(treads)
+  length = jnp.where(is_landing, LANDING_LENGTH, treads)
+  top = (k + 1) * riser
   pos = jnp.stack([x0 + length / 2, jnp.zeros_like(x0), top / 2], axis=-1)
   size = jnp.stack([length / 2, jnp.full_like(x0, WIDTH / 2), top / 2], axis=-1)
+  return park_unused(pos, size, used)
+
+
+def park_unused(pos: jax.Array, size: jax.Array, used: jax.Array) -> tuple[jax.Array, jax.Array]:
+  """Boxes where used, else small boxes parked far below the floor, 3 m apart."""
+  k = jnp.arange(pos.shape[0], dtype=pos.dtype)
   parked_pos = jnp.array(PARK) + jnp.stack([-3.0 * k, 0 * k, 0 * k], axis=-1)
-  pos = jnp.where(used[:, None], pos, parked_pos)
-  size = jnp.where(used[:, None], size, 0.1)
-  return pos, size
+  return jnp.where(used[:, None], pos, parked_pos), jnp.where(used[:, None], size, 0.1)
 
 
 def ascent_goal(stairs: Staircase) -> jax.Array:
@@ -108,7 +122,7 @@ def descent_spawn(stairs: Staircase) -> tuple[jax.Array, jax.Array]:
 
 STAIR_PARAMS = ("tread", "riser", "steps")  # xi = (l m, h m, n)
 STAIR_HARD = ("low", "high", "high")  # hardest: short treads, tall risers, many steps
-STAIR_LIMITS = ((0.1, 1.0), (0.01, 0.4), (1, MAX_STEPS))  # what the generator supports (m, m, count)
+STAIR_LIMITS = (TREAD_LIMITS, RISER_LIMITS, (1, MAX_STEPS))  # what the generator supports (m, m, count)
 
 
 def stair_ranges(tread: tuple[float, float], riser: tuple[float, float],
@@ -121,6 +135,20 @@ def stair_ranges(tread: tuple[float, float], riser: tuple[float, float],
 
 SPAWN_Y = 0.75  # m, random spawn / goal lateral offset ~ U(-0.75, 0.75)
 SPAWN_YAW = jnp.pi / 2  # rad, random spawn yaw offset ~ U(-pi/2, pi/2)
+
+
+def randomized_ends(keys: list[jax.Array], spawn: jax.Array, yaw: jax.Array, goal: jax.Array, ahead: float,
+                    random_spawn: bool, random_goal: bool) -> tuple[jax.Array, jax.Array, jax.Array]:
+  """Spawn, yaw and goal with the random offsets asked for (keys: four); ahead: +1 if the goal lies
+  toward +x."""
+  k_y, k_yaw, k_gy, k_gx = keys
+  if random_spawn:
+    spawn = spawn.at[1].set(jax.random.uniform(k_y, minval=-SPAWN_Y, maxval=SPAWN_Y))  # y ~ U(-0.75, 0.75) m
+    yaw = yaw + jax.random.uniform(k_yaw, minval=-SPAWN_YAW, maxval=SPAWN_YAW)  # yaw offset ~ U(-pi/2, pi/2)
+  if random_goal:
+    goal = goal.at[1].set(jax.random.uniform(k_gy, minval=-SPAWN_Y, maxval=SPAWN_Y))  # y ~ U(-0.75, 0.75) m
+    goal = goal.at[0].add(ahead * jax.random.uniform(k_gx, minval=-0.5, maxval=0.5))  # x offset ~ U(-0.5, 0.5) m
+  return spawn, yaw, goal
 
 
 @dataclasses.dataclass(frozen=True)
@@ -156,20 +184,15 @@ class StairScene:
 
   def sample(self, key: jax.Array, eps: jax.Array) -> SceneState:
     """Draws xi, places the boxes, the spawn (ground point, yaw) and the goal."""
-    k_xi, k_y, k_yaw, k_gy, k_gx = jax.random.split(key, 5)
+    k_xi, *k_ends = jax.random.split(key, 5)
     xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant)
     st = self.stairs(xi)
     pos, size = step_boxes(st, self.n_boxes)
     up = self.direction == "up"
     spawn, yaw = ascent_spawn(st) if up else descent_spawn(st)
     goal = ascent_goal(st) if up else descent_goal(st)
-    if self.random_spawn:
-      spawn = spawn.at[1].set(jax.random.uniform(k_y, minval=-SPAWN_Y, maxval=SPAWN_Y))
-      yaw = yaw + jax.random.uniform(k_yaw, minval=-SPAWN_YAW, maxval=SPAWN_YAW)
-    if self.random_goal:
-      ahead = 1.0 if up else -1.0
-      goal = goal.at[1].set(jax.random.uniform(k_gy, minval=-SPAWN_Y, maxval=SPAWN_Y))
-      goal = goal.at[0].add(ahead * jax.random.uniform(k_gx, minval=-0.5, maxval=0.5))
+    spawn, yaw, goal = randomized_ends(k_ends, spawn, yaw, goal, 1.0 if up else -1.0, self.random_spawn,
+                                       self.random_goal)
     # the goal is a line across the staircase (the stair modes cannot steer nor observe lateral
     # drift); a random goal is a point with a random lateral offset, for modes that steer
     halfwidth = jnp.float32(0.0 if self.random_goal else GOAL_HALFWIDTH)

@@ -91,7 +91,7 @@ def test_hardest_scene_pins_every_parameter_at_its_hard_end():
   from train.evaluate import scene_config
   s = scene_config(load_config("asc-inc-cog", ["scene.tread=[0.4, 0.5]"]), "hardest").scene
   assert (s.tread, s.riser, s.steps, s.sampler) == ((0.4, 0.4), (0.22, 0.22), (7, 7), "uniform")
-  with pytest.raises(ConfigError, match="stair tasks only"):
+  with pytest.raises(ConfigError, match="stair and terrain tasks only"):
     scene_config(load_config("nav"), "hardest")
 
 

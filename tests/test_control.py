@@ -12,9 +12,18 @@ from mjx_tracks.robots import get_robot
 JAGUAR, ABSOLEM = get_robot(1), get_robot(2)
 
 
-def test_modes_have_the_papers_sizes():
+def test_modes_have_their_sizes():  # the paper's four, and 3dof_stairs for robot 2 on stairs
   assert {k: len(v) for k, v in CONTROL_MODES.items()} == {
-      "4dof": 4, "6dof": 6, "8dof": 8, "5dof_stairs": 5}
+      "4dof": 4, "6dof": 6, "8dof": 8, "5dof_stairs": 5, "3dof_stairs": 3}
+
+
+def test_the_armless_stair_mode_drives_robot_2s_flipper_pairs():
+  c = Controller.create(ABSOLEM, "3dof_stairs", increments=True)
+  v, w, t = c.decode(jnp.array([1.0, 1.0, -0.5]), jnp.zeros(4))
+  front, rear = ABSOLEM.joint_index("front"), ABSOLEM.joint_index("rear")
+  assert float(v) == pytest.approx(1.0) and float(w) == 0.0 and len(front) == len(rear) == 2
+  np.testing.assert_allclose(np.asarray(t)[front], INCREMENT, atol=1e-6)
+  np.testing.assert_allclose(np.asarray(t)[rear], -0.5 * INCREMENT, atol=1e-6)
 
 
 def test_stair_mode_increments_accumulate_and_clip():

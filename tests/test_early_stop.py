@@ -23,7 +23,7 @@ def test_criteria_parse_with_their_defaults_and_name_bad_input():
                       ("success=0.9x0", "count of reports in a row"), ("success=0.9xa", "count of reports")):
     with pytest.raises(ValueError, match=words):
       parse_early_stop(text, up)
-  with pytest.raises(ValueError, match="no hardest staircase"):
+  with pytest.raises(ValueError, match="no hardest configuration"):
     parse_early_stop("success", nav)
   with pytest.raises(ValueError, match="no paper threshold"):
     parse_early_stop("return", nav)

@@ -12,15 +12,19 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import mjx_tracks
-from mjx_tracks.envs.config import available_tasks
+from mjx_tracks.envs.config import available_tasks, load_config
 from mjx_tracks.envs.task_env import METRICS
 from mjx_tracks.envs.wrappers import batched_env
 
 N_ENVS = 2
-# compiled and stepped: one per direction and scene kind; between them they use every sampler and
-# reward kind, and every other task differs from one of them in those keys only (checked below)
-RUN_TASKS = ("asc-inc-cog", "des-inc-ang", "nav")
-TRACE_ONLY_KEYS = {"task", "scene.sampler", "reward.kind"}
+N_TERRAIN_ENVS, TERRAIN_SEED = 16, 4  # the mixed terrain task's reset: every kind drawn (checked)
+# compiled and stepped: one per direction, scene kind and robot; between them they run every
+# sampler, reward kind, direction and terrain kind (the mixed task draws each), so every other task,
+# differing from one of them in those keys only (checked below), runs code they compile; a task
+# differing in a size as well (the staircase box pool) is traced to check its shapes
+RUN_TASKS = ("asc-inc-cog", "des-inc-ang", "nav", "mixed-terrain", "asc-inc-cog-r2")
+EXERCISED_KEYS = {"task", "scene.sampler", "reward.kind", "scene.direction", "scene.terrains", "episode.max_steps"}
+SIZE_KEYS = {"scene.steps"}
 
 
 @functools.lru_cache(maxsize=None)
@@ -38,30 +42,37 @@ def _flat(d: dict, prefix: str = "") -> dict:
 
 
 @pytest.mark.parametrize("task", sorted(set(available_tasks()) - set(RUN_TASKS)))
-def test_every_other_task_traces_reset_and_step_and_differs_from_a_run_task_in_sampler_or_reward(task):
-  """Tracing (no XLA compilation) checks the config builds and the shapes agree; the keys it differs
-  in are exercised by the compiled tasks."""
+def test_every_other_task_differs_from_a_run_task_only_in_keys_the_run_tasks_exercise(task):
+  """Its sizes match that run task's; a task with a size of its own is traced (no XLA compilation)."""
   core = mjx_tracks.load(task)
   cfg = _flat(core.cfg.to_dict())
-  diffs = [{k for k in cfg if cfg[k] != _flat(mjx_tracks.load(t).cfg.to_dict()).get(k)} for t in RUN_TASKS]
-  assert any(d <= TRACE_ONLY_KEYS for d in diffs), diffs
-  env = batched_env(core)
-  s = jax.eval_shape(env.reset, jax.random.split(jax.random.PRNGKey(0), N_ENVS))
-  s = jax.eval_shape(env.step, s, jax.ShapeDtypeStruct((N_ENVS, core.action_size), jnp.float32))
-  assert s.obs.shape == (N_ENVS, core.observation_size) and set(s.metrics) == set(METRICS)
+  diffs = {t: {k for k in cfg if cfg[k] != _flat(load_config(t).to_dict()).get(k)} for t in RUN_TASKS}
+  near = [t for t, d in diffs.items() if d <= EXERCISED_KEYS | SIZE_KEYS]
+  assert near, diffs
+  run = mjx_tracks.load(near[0])
+  assert (core.observation_size, core.action_size) == (run.observation_size, run.action_size)
+  if diffs[near[0]] & SIZE_KEYS:
+    env = batched_env(core)
+    s = jax.eval_shape(env.reset, jax.random.split(jax.random.PRNGKey(0), N_ENVS))
+    s = jax.eval_shape(env.step, s, jax.ShapeDtypeStruct((N_ENVS, core.action_size), jnp.float32))
+    assert s.obs.shape == (N_ENVS, core.observation_size) and set(s.metrics) == set(METRICS)
 
 
 @pytest.mark.parametrize("task", RUN_TASKS)
 def test_task_jits_reset_and_ten_steps_with_finite_observations(task):
   core, _, reset, step = _compiled(task)
-  s = reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
-  assert s.obs.shape == (N_ENVS, core.observation_size)
+  terrain = core.cfg.scene.kind == "terrain"
+  n = N_TERRAIN_ENVS if terrain else N_ENVS
+  s = reset(jax.random.split(jax.random.PRNGKey(TERRAIN_SEED if terrain else 0), n))
+  assert s.obs.shape == (n, core.observation_size)
+  if terrain:
+    assert set(np.asarray(s.pipeline_state.scene.variant)) == set(range(len(core.cfg.scene.terrains)))
   key = jax.random.PRNGKey(1)
   for _ in range(10):
     key, k = jax.random.split(key)
-    s = step(s, jax.random.uniform(k, (N_ENVS, core.action_size), minval=-1, maxval=1))
+    s = step(s, jax.random.uniform(k, (n, core.action_size), minval=-1, maxval=1))
     assert np.isfinite(np.asarray(s.obs)).all() and np.isfinite(np.asarray(s.reward)).all()
-  assert s.obs.shape == (N_ENVS, core.observation_size)
+  assert s.obs.shape == (n, core.observation_size)
   assert set(s.metrics) == set(METRICS)
   assert float(np.asarray(s.metrics["physics_nan"]).sum()) == 0.0
 

@@ -43,7 +43,7 @@ def test_a_run_plans_like_its_command_line(tmp_path):
     ({"groups": [{**GROUP, "steps": [0]}]}, "budgets >= 1"),
     ({"groups": [GROUP, GROUP]}, "group names repeat"),
     ({"groups": [{**GROUP, "set": ["reward.cog_scal=1"]}]}, r"groups\[0\] \(ppo\) on asc-inc-cog: reward.cog_scal: unknown key"),
-    ({"tasks": ["nav"], "groups": [{**GROUP, "early_stop": "success"}]}, "nav has no hardest staircase"),
+    ({"tasks": ["nav"], "groups": [{**GROUP, "early_stop": "success"}]}, "nav has no hardest configuration"),
     ({"groups": [{**GROUP, "budgets": "some"}]}, r"groups\[0\].budgets: one of"),
     ({"groups": [{**GROUP, "budgets": "milestones", "early_stop": "return"}]}, "an early stop would cut them short"),
     ({"compare": [["asc-inc-cog", "nav"]]}, r"compare\[0\]: two different tasks of the study"),

@@ -162,7 +162,7 @@ def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path,
     assert run.main(["--task", "asc-inc-cog", *bad, "--out", str(tmp_path / "z")]) == 2
     assert words in capsys.readouterr().err
   assert run.main(["--task", "nav", "--probe-every", "10", "--out", str(tmp_path / "z")]) == 2
-  assert "no hardest staircase" in capsys.readouterr().err
+  assert "no hardest configuration" in capsys.readouterr().err
   assert not os.path.exists(str(tmp_path / "z"))
   before = open(os.path.join(out, "run.json")).read()
   assert run.main(["--task", "asc-inc-cog", "--out", out]) == 2

@@ -74,6 +74,6 @@ def parse_early_stop(text: str, cfg) -> EarlyStop:
       raise ValueError(f"--early-stop return: task {cfg.task} has no paper threshold; give return=X")
   if metric == "success" and not 0.0 <= threshold <= 1.0:
     raise ValueError(f"--early-stop {text}: a success threshold is in [0, 1]")
-  if metric == "success" and cfg.scene.kind != "stairs":
-    raise ValueError(f"--early-stop success: task {cfg.task} has no hardest staircase; use return=X")
+  if metric == "success" and not cfg.scene.has_hardest:
+    raise ValueError(f"--early-stop success: task {cfg.task} has no hardest configuration; use return=X")
   return EarlyStop(metric, threshold, times)

@@ -1,10 +1,11 @@
 """`python -m train.evaluate RUN_DIR --trials 100 --scene hardest`: run a trained policy.
 
 Scenes: hardest (every staircase parameter at its hard end of the task's ranges: n = n_max,
-l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by default), uniform (the
-task's ranges, uniform), incremental (the task's sampler at --eps), train (the task's own sampler
-at --eps), held-out/NAME (a fixed staircase of the task's evaluation.held_out); --suite runs the
-evaluation suite (hardest, uniform, every held-out staircase). Trials run in parallel, one episode
+l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by default; for terrain
+tasks every parameter of each kind), uniform (the task's ranges, uniform), incremental (the task's
+sampler at --eps), train (the task's own sampler at --eps), held-out/NAME (a fixed staircase of the
+task's evaluation.held_out), hardest/KIND (a terrain task's kind KIND alone, at its hardest);
+--suite runs the evaluation suite (suite_scenes). Trials run in parallel, one episode
 each, deterministic policy: the exported RUN_DIR/policy, those exported at milestone budgets too
 (--milestones), or with --checkpoint [STEP] a training checkpoint (a killed run has no export yet).
 Writes RUN_DIR/eval-<scene>[@<budget>].json (mean +- std of progress, success, COG deviation,
@@ -22,18 +23,24 @@ import sys
 
 import numpy as np
 
-from mjx_tracks.envs.config import ConfigError, TaskConfig, from_dict
+from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig, from_dict
 from scenes.staircase import STAIR_HARD, STAIR_PARAMS
+from scenes.terrain_kinds import TERRAIN_PARAMS
 
 SCENES = ("hardest", "uniform", "incremental", "train")
 
 
 HELD_OUT = "held-out/"  # scene name prefix of the task's fixed held-out staircases (evaluation.held_out)
+HARDEST = "hardest/"  # scene name prefix of one terrain kind's hardest configuration (terrain tasks)
 
 
 def suite_scenes(cfg: TaskConfig) -> list[str]:
-  """A study's evaluation suite: hardest, uniform and each held-out staircase (stair tasks), uniform (nav)."""
-  if cfg.scene.kind != "stairs":
+  """A study's evaluation suite: hardest, uniform and each held-out staircase (stair tasks); hardest,
+  uniform and, with several kinds, each kind's hardest (terrain tasks); uniform (nav)."""
+  s = cfg.scene
+  if s.kind == "terrain":
+    return ["hardest", "uniform", *((HARDEST + k for k in s.terrains) if len(s.terrains) > 1 else ())]
+  if s.kind != "stairs":
     return ["uniform"]
   return ["hardest", "uniform", *(HELD_OUT + h.name for h in cfg.evaluation.held_out)]
 
@@ -48,23 +55,43 @@ def _held_out(cfg: TaskConfig, scene: str) -> TaskConfig:
   return dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, sampler="uniform", **pinned))
 
 
+def _hardest_terrain(s: SceneConfig, kinds: tuple[str, ...]) -> SceneConfig:
+  """Terrain scenes of the given kinds with every parameter of each at its hard end."""
+  pinned = {}
+  for kind in kinds:
+    ranges, p = getattr(s.terrain, kind), TERRAIN_PARAMS[kind]
+    pinned[kind] = dataclasses.replace(ranges, **{n: (getattr(ranges, n)[end == "high"],) * 2
+                                                  for n, end in zip(p.names, p.hard)})
+  return dataclasses.replace(s, sampler="uniform", terrains=kinds, terrain=dataclasses.replace(s.terrain, **pinned))
+
+
+def _hardest(s: SceneConfig, scene: str) -> SceneConfig:
+  """hardest: every parameter at its hard end; hardest/KIND: a terrain task's kind KIND alone."""
+  if not s.has_hardest:
+    raise ConfigError(f"scene {scene!r} exists for stair and terrain tasks only")
+  if s.kind == "terrain":
+    kind = scene[len(HARDEST):] if scene.startswith(HARDEST) else None
+    if kind is not None and kind not in s.terrains:
+      raise ConfigError(f"scene {scene!r}: the task draws terrains {list(s.terrains)}")
+    return _hardest_terrain(s, (kind,) if kind else s.terrains)
+  if scene != "hardest":
+    raise ConfigError(f"scene {scene!r}: {HARDEST}KIND is for terrain tasks")
+  pinned = {name: (getattr(s, name)[end == "high"],) * 2  # each parameter at its hard end
+            for name, end in zip(STAIR_PARAMS, STAIR_HARD)}
+  return dataclasses.replace(s, sampler="uniform", **pinned)
+
+
 def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
-  """The task with its scenes drawn as an evaluation scene says (SCENES, or held-out/NAME)."""
+  """The task with its scenes drawn as an evaluation scene says (SCENES, held-out/NAME or hardest/KIND)."""
   s = cfg.scene
   if scene.startswith(HELD_OUT):
     return _held_out(cfg, scene)
+  if scene == "hardest" or scene.startswith(HARDEST):
+    return dataclasses.replace(cfg, scene=_hardest(s, scene))
   if scene not in SCENES:
-    raise ConfigError(f"unknown scene {scene!r}: one of {SCENES} or {HELD_OUT}NAME")
-  if scene == "hardest":
-    if s.kind != "stairs":
-      raise ConfigError("scene 'hardest' exists for stair tasks only")
-    pinned = {name: (getattr(s, name)[end == "high"],) * 2  # each parameter at its hard end
-              for name, end in zip(STAIR_PARAMS, STAIR_HARD)}
-    s = dataclasses.replace(s, sampler="uniform", **pinned)
-  elif scene == "uniform":
-    s = dataclasses.replace(s, sampler="uniform")
-  elif scene == "incremental":
-    s = dataclasses.replace(s, sampler="incremental")
+    raise ConfigError(f"unknown scene {scene!r}: one of {SCENES}, {HELD_OUT}NAME or {HARDEST}KIND")
+  if scene in ("uniform", "incremental"):
+    s = dataclasses.replace(s, sampler=scene)
   return dataclasses.replace(cfg, scene=s)
 
 
@@ -179,10 +206,10 @@ def parser() -> argparse.ArgumentParser:
   p = argparse.ArgumentParser(prog="python -m train.evaluate", description=__doc__.splitlines()[0])
   p.add_argument("run_dir")
   p.add_argument("--trials", type=int, default=EVAL_TRIALS)
-  p.add_argument("--scene", default="hardest", help=f"one of {', '.join(SCENES)} or {HELD_OUT}NAME "
-                 "(a staircase of the task's evaluation.held_out)")
+  p.add_argument("--scene", default="hardest", help=f"one of {', '.join(SCENES)}, {HELD_OUT}NAME "
+                 f"(a staircase of the task's evaluation.held_out) or {HARDEST}KIND (a terrain kind)")
   p.add_argument("--suite", action="store_true", help="every scene of the task's evaluation suite "
-                 "(hardest, uniform, each held-out staircase) instead of --scene")
+                 "(hardest, uniform, each held-out staircase or terrain kind) instead of --scene")
   p.add_argument("--eps", type=float, default=EVAL_EPS, help="difficulty for incremental / train scenes")
   p.add_argument("--seed", type=int, default=EVAL_SEED)
   p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>[@<budget>].json; one scene only)")

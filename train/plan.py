@@ -173,17 +173,17 @@ def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:
 
 
 def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int:
-  """Steps between hardest-staircase probes: as given, else the preset's (stair tasks); an early
+  """Steps between hardest-configuration probes: as given, else the preset's (stair and terrain tasks); an early
   stop on success needs them."""
   if given is not None and given < 0:
     raise RunError("--probe-every must be >= 0 (0: no probe)")
   if given == 0 and early is not None and early.needs_probe:
     raise RunError(f"--early-stop {early} needs the hardest-staircase probe; drop --probe-every 0")
-  every = given if given is not None else (preset.probe_steps if cfg.scene.kind == "stairs" else 0)
+  every = given if given is not None else (preset.probe_steps if cfg.scene.has_hardest else 0)
   if early is not None and early.needs_probe and every == 0:
     every = preset.probe_steps or preset.training_metrics_steps
-  if every and cfg.scene.kind != "stairs":
-    raise RunError(f"--probe-every: task {cfg.task} has no hardest staircase to probe")
+  if every and not cfg.scene.has_hardest:
+    raise RunError(f"--probe-every: task {cfg.task} has no hardest configuration to probe")
   return every
 
 

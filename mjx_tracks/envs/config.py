@@ -18,6 +18,7 @@ import yaml
 
 from mjx_tracks.bounds import bound, violation
 from mjx_tracks.sim.physics import PhysicsConfig
+from scenes.terrain_kinds import TERRAIN_PARAMS
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
 
@@ -100,12 +101,36 @@ class CurriculumConfig:
     require(self.rule in RULES, f"{key}.rule", f"must be one of {RULES}, got {self.rule!r}")
 
 
+def _terrain_ranges_class():
+  """scene.terrain: a section per terrain kind (scenes.terrain_kinds), a [min, max] per parameter."""
+  kinds = []
+  for kind, p in TERRAIN_PARAMS.items():
+    fields = [(n, tuple[int, int] if i else tuple[float, float]) for n, i in zip(p.names, p.integer)]
+    kinds.append((kind, dataclasses.make_dataclass(f"{kind.title().replace('_', '')}Ranges", fields, frozen=True)))
+  return dataclasses.make_dataclass("TerrainRanges", kinds, frozen=True)
+
+
+TerrainRanges = _terrain_ranges_class()
+
+
+def _validate_terrain(kinds: tuple[str, ...], ranges, key: str) -> None:
+  """The kinds a terrain task draws, and every kind's ranges against what its generator supports."""
+  require(bool(kinds) and all(k in TERRAIN_PARAMS for k in kinds), f"{key}.terrains",
+          f"a terrain task needs a non-empty list of {list(TERRAIN_PARAMS)}, got {list(kinds)}")
+  require(len(set(kinds)) == len(kinds), f"{key}.terrains", f"has duplicates: {list(kinds)}")
+  for kind, p in TERRAIN_PARAMS.items():
+    for name, (lo, hi) in zip(p.names, p.limits):
+      r = getattr(getattr(ranges, kind), name)
+      require(lo <= r[0] <= r[1] <= hi, f"{key}.terrain.{kind}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(r)}")
+
+
+SCENE_KINDS = ("stairs", "nav", "terrain")
 _RENAMED_VARIANTS = {"paper": "paper_literal", "original": "original_code"}
 
 
 @dataclasses.dataclass(frozen=True)
 class SceneConfig:
-  kind: str  # stairs | nav
+  kind: str  # SCENE_KINDS
   direction: str  # stairs: up | down
   sampler: str  # scenes.samplers.SAMPLERS
   variant: str  # scenes.samplers.VARIANTS
@@ -113,14 +138,23 @@ class SceneConfig:
   riser: tuple[float, float]  # m, h
   steps: tuple[int, int]  # n
   nav_kinds: tuple[str, ...]
+  terrains: tuple[str, ...]  # terrain: the kinds drawn per episode (scenes.terrain)
+  terrain: TerrainRanges  # every terrain kind's parameter ranges
   random_spawn: bool
   random_goal: bool
   curriculum: CurriculumConfig
 
+  @property
+  def has_hardest(self) -> bool:
+    """Whether its scenes have a hardest configuration (every parameter at its hard end)."""
+    return self.kind in ("stairs", "terrain")
+
   def validate(self, key: str) -> None:
     from scenes.samplers import SAMPLERS, VARIANTS  # noqa: PLC0415
     from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
-    require(self.kind in ("stairs", "nav"), f"{key}.kind", "must be 'stairs' or 'nav'")
+    require(self.kind in SCENE_KINDS, f"{key}.kind", f"must be one of {SCENE_KINDS}, got {self.kind!r}")
+    if self.kind == "terrain":
+      _validate_terrain(self.terrains, self.terrain, key)
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
     require(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
     hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
@@ -212,7 +246,8 @@ class TaskConfig:
       from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
       require("w" in CONTROL_MODES[self.control.mode], "control.mode",
              "navigation needs a mode with angular velocity w")
-      require(not self.evaluation.held_out, "evaluation.held_out", "held-out staircases need a stair task")
+    require(not self.evaluation.held_out or self.scene.kind == "stairs", "evaluation.held_out",
+            "held-out staircases need a stair task")
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
 
@@ -313,10 +348,13 @@ def available_tasks() -> list[str]:
                 if p.name.endswith(".yaml") and p.name[:-5] != DEFAULTS)
 
 
+FROM_DEFAULTS = "from configs/defaults.yaml"  # an added key whose old runs never read it
 # keys added since runs were first recorded -> the value that reproduces what those runs ran
 ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  # before culling: every contact
               ("evaluation", "held_out"): [],  # before the evaluation suite: none
-              ("control", "dof_curriculum"): []}  # before the DOF curriculum: every dimension acts
+              ("control", "dof_curriculum"): [],  # before the DOF curriculum: every dimension acts
+              ("scene", "terrains"): [],  # before terrain tasks: none
+              ("scene", "terrain"): FROM_DEFAULTS}
 
 
 def _with_added_keys(raw: dict) -> dict:
@@ -324,6 +362,7 @@ def _with_added_keys(raw: dict) -> dict:
   raw = dict(raw)
   for (section, key), value in ADDED_KEYS.items():
     if isinstance(raw.get(section, {}), dict) and key not in raw.get(section, {}):
+      value = _read_yaml(DEFAULTS)[section][key] if value == FROM_DEFAULTS else value
       raw[section] = {**raw.get(section, {}), key: value}
   return raw
 

@@ -8,6 +8,8 @@ sampler at difficulty eps; `reset_at(key, eps, penalty_k)` is what the curriculu
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 from brax.envs.base import Env, State
@@ -28,6 +30,7 @@ from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
 from scenes.scene import SceneState
 from scenes.staircase import StairScene, Staircase, stair_ranges
+from scenes.terrain import TerrainScene, terrain_ranges
 
 METRICS = tuple(f"reward/{t}" for t in REWARD_TERMS) + (
     "progress", "cog_deviation", "on_stairs", "pitch_rate", "tipped_over", "goal_reached",
@@ -49,11 +52,14 @@ class EnvState:
   key: jax.Array
 
 
-def make_scene(s: SceneConfig) -> StairScene | NavScene:
+def make_scene(s: SceneConfig) -> StairScene | NavScene | TerrainScene:
   """The scene generator of a task's scene section."""
   if s.kind == "stairs":
     ranges = stair_ranges(s.tread, s.riser, s.steps)
     return StairScene(s.direction, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
+  if s.kind == "terrain":
+    ranges = terrain_ranges(s.terrains, {k: dataclasses.asdict(getattr(s.terrain, k)) for k in s.terrains})
+    return TerrainScene(s.terrains, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
   return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal)
 
 

@@ -33,6 +33,7 @@ CONTROL_MODES: dict[str, tuple[str, ...]] = {
     "6dof": ("v", "w", "front_left", "front_right", "rear_left", "rear_right"),
     "8dof": ("v", "w", "front_left", "front_right", "rear_left", "rear_right", "arm_1", "arm_2"),
     "5dof_stairs": ("v", "front", "rear", "arm_1", "arm_2"),
+    "3dof_stairs": ("v", "front", "rear"),  # a robot without an arm on the stairs (robot 2)
 }
 
 

@@ -9,6 +9,8 @@ import os
 
 import numpy as np
 
+from mjx_tracks.envs.config import load_config
+from train.evaluate import HARDEST, HELD_OUT
 from train.study.executor import overview
 from train.study.figures import write_figures
 from train.study.paper import FIGURE9
@@ -30,9 +32,10 @@ def _mean_sd(x: np.ndarray, digits: int = 3) -> str:
 
 
 def final_table(results: StudyResults) -> list[str]:
-  """One row per (group, task, budget): IQM [95 % CI] of success / progress per scene, held-out
-  success, and mean +- sd over seeds of pitch rate and tip-overs on the hardest staircase."""
-  held = [s for s in results.scenes() if s.startswith("held-out/")]
+  """One row per (group, task, budget): IQM [95 % CI] of success / progress per scene, success on
+  each held-out staircase and each terrain kind's hardest, and mean +- sd over seeds of pitch rate
+  and tip-overs on the hardest configuration."""
+  held = [s for s in results.scenes() if s.startswith((HELD_OUT, HARDEST))]
   cols = [f"{m} {s}" for m, s in FINAL_COLUMNS] + [f"success {s}" for s in held]
   lines = [f"| group | task | budget | runs | {' | '.join(cols)} | pitch rate hardest (rad/s) | tip-overs hardest |",
            "|---" * (len(cols) + 6) + "|"]
@@ -60,12 +63,32 @@ def improvement_table(results: StudyResults) -> list[str]:
   return lines
 
 
+def generalization_table(results: StudyResults) -> list[str]:
+  """Each terrain task drawing several kinds (mixed) on each kind's hardest configuration, beside
+  the specialist tasks of that kind on theirs: IQM [95 % CI] of success over seeds."""
+  kinds = {t: load_config(t).scene for t in results.spec.tasks}
+  mixed = [t for t, s in kinds.items() if s.kind == "terrain" and len(s.terrains) > 1]
+  lines = []
+  for group, task, budget in results.groups():
+    if task not in mixed:
+      continue
+    for kind in kinds[task].terrains:
+      own = iqm_intervals({"x": results.final(group, task, budget, HARDEST + kind, "success")}).get("x")
+      special = [(t, iqm_intervals({"x": results.final(group, t, budget, "hardest", "success")}).get("x"))
+                 for t, s in kinds.items() if s.kind == "terrain" and s.terrains == (kind,)]
+      lines.append(f"| {group} | {budget:,} | {kind} | {_ci(own)} | "
+                   f"{'; '.join(f'{t}: {_ci(e)}' for t, e in special) or '-'} |")
+  head = ["| group | budget | terrain kind | mixed policy, success on its hardest | specialist policy, success on its hardest |",
+          "|---|---|---|---|---|"]
+  return head + lines if lines else []
+
+
 def paper_table(results: StudyResults) -> list[str]:
   """The paper's Figure 9 (10 trials on the hardest staircase, one policy each) beside this study's
   hardest-staircase figures: mean +- sd over seeds of each run's mean over its trials."""
   lines = ["| task | source | progress | COG deviation (m) | pitch rate (rad/s) |", "|---|---|---|---|---|"]
-  for task in results.spec.tasks:
-    p = FIGURE9.get(task, {})
+  for task in (t for t in results.spec.tasks if t in FIGURE9):
+    p = FIGURE9[task]
     lines.append(f"| {task} | paper (Figure 9) | {p.get('progress', '')} | {p.get('cog_deviation', '')} | "
                  f"{p.get('pitch_rate', '')} |")
     for group, t, budget in results.groups():
@@ -110,10 +133,18 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
             "P(A > B): the probability that a run of A scores above a run of B (ties count half), "
             f"with its {LEVEL:.0%} bootstrap interval (rliable). 0.5: no difference.", "",
             *(rows if len(rows) > 2 else ["No pair has finished runs on both sides yet."]), ""]
-  out += ["## The paper's Figure 9 side by side", "",
-          "The paper evaluated one policy per task with 10 trials on the hardest staircase; here each "
-          "seed's policy has its own trials, and the figure is mean +- sd over seeds.", "",
-          *paper_table(results), "", "## Figures", ""]
+  general = generalization_table(results)
+  if general:
+    out += ["## Generalization: the mixed-terrain policy on each terrain", "",
+            "Success on each terrain kind's hardest configuration (`hardest/KIND`), IQM over seeds "
+            f"[{LEVEL:.0%} CI], of the policy trained on every kind and of the specialists trained on that kind.",
+            "", *general, ""]
+  if any(t in FIGURE9 for t in spec.tasks):
+    out += ["## The paper's Figure 9 side by side", "",
+            "The paper evaluated one policy per task with 10 trials on the hardest staircase; here each "
+            "seed's policy has its own trials, and the figure is mean +- sd over seeds.", "",
+            *paper_table(results), ""]
+  out += ["## Figures", ""]
   out += [f"![{name}]({name})" for name in figures]
   return "\n".join(out) + "\n"
 

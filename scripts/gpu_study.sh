@@ -1,29 +1,30 @@
 #!/usr/bin/env bash
-# On a GPU host: runs configs/studies/paper.yaml (PPO runs on the GPUs, SLOTS_PER_GPU each; the
-# one-robot SAC runs on CPU_SLOTS CPU slots). The first call on a machine starts the study in its
+# On a GPU host: runs configs/studies/$STUDY.yaml (default paper; PPO runs on the GPUs,
+# SLOTS_PER_GPU each; one-robot SAC runs on CPU_SLOTS CPU slots). The first call on a machine starts the study in its
 # own process session (setsid), so it keeps running between calls that follow each other while the
 # machine stays warm; every call then waits WAIT seconds (or until the study ends), packing the
 # study folder (without checkpoints), its log and the logs of the attempts still running into
-# $OUT/paper-study.tgz every 30 s and at the end. Afterwards, anywhere:
-# `python -m train.study report paper --root DIR`.
+# $OUT/$STUDY-study.tgz every 30 s and at the end. Afterwards, anywhere:
+# `python -m train.study report $STUDY --root DIR`.
 # FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
 # its finished runs are skipped. A study still running when the machine goes back resumes the same
 # way from the last pack (its running attempts start again).
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.
-# Usage: WAIT=560 SLOTS_PER_GPU=2 CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu_paper_study.sh [ARGS]
+# Usage: [STUDY=paper] WAIT=560 SLOTS_PER_GPU=2 CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu_study.sh [ARGS]
 set -uo pipefail
 export PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 export XLA_FLAGS="--xla_cpu_multi_thread_eigen=false"  # many one-robot CPU runs side by side: one thread each
+study=${STUDY:-paper}
 root=/tmp/studies
 log=$root/study.log
 pidfile=$root/study.pid
-cmd=(python3 -m train.study paper --root "$root" --slots-per-gpu "${SLOTS_PER_GPU:-1}" --cpu-slots "${CPU_SLOTS:-20}" "$@")
+cmd=(python3 -m train.study "$study" --root "$root" --slots-per-gpu "${SLOTS_PER_GPU:-1}" --cpu-slots "${CPU_SLOTS:-20}" "$@")
 
 running() { [ -f "$pidfile" ] && kill -0 "$(cat "$pidfile")" 2>/dev/null; }
 
 start() {
   mkdir -p "$root"
-  if [ -n "${FROM:-}" ]; then rm -rf "$root/paper" && cp -r "$FROM" "$root/paper"; fi
+  if [ -n "${FROM:-}" ]; then rm -rf "${root:?}/$study" && cp -r "$FROM" "$root/$study"; fi
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1) x $(nvidia-smi -L | wc -l)"
   { echo "command: ${cmd[*]}"; echo "device: $device, $(nproc) CPU cores, date: $(date -u +%FT%TZ)"; } | tee -a "$log"
   setsid bash -c '"$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
@@ -32,14 +33,14 @@ start() {
 }
 
 pack() {
-  cp "$log" "$root/paper/" 2>/dev/null
-  (cd /tmp && tar czf "$OUT/paper-study.tgz.tmp" --exclude=checkpoints studies/paper study-cell-*/attempt.log 2>/dev/null)
-  mv "$OUT/paper-study.tgz.tmp" "$OUT/paper-study.tgz"
+  cp "$log" "$root/$study/" 2>/dev/null
+  (cd /tmp && tar czf "$OUT/$study-study.tgz.tmp" --exclude=checkpoints "studies/$study" study-cell-*/attempt.log 2>/dev/null)
+  mv "$OUT/$study-study.tgz.tmp" "$OUT/$study-study.tgz"
 }
 
 if running; then echo "the study is running (pid $(cat "$pidfile")); waiting ${WAIT:-560} s"; else start; fi
 end=$((SECONDS + ${WAIT:-560}))
 while [ $SECONDS -lt $end ] && running; do sleep 30; pack; grep "\[study\]" "$log" | tail -1; done
 tail -5 "$log"
-python3 -m train.study status paper --root "$root" --runs 2>&1 | tee "$root/paper/status.txt" | tail -70
+python3 -m train.study status "$study" --root "$root" --runs 2>&1 | tee "$root/$study/status.txt" | tail -70
 pack
