@@ -41,31 +41,49 @@ def curves_figure(results: StudyResults, group: str, x: str):
   return fig
 
 
-def final_figure(results: StudyResults, group: str, metric: str = "success"):
-  """One panel per evaluation scene: IQM of `metric` over seeds per budget, a line per task."""
-  plt = _pyplot()
-  scenes = results.scenes()
-  fig, axes = plt.subplots(1, len(scenes), figsize=(3.6 * len(scenes), 3.4), constrained_layout=True,
-                           squeeze=False)
-  budgets = sorted({b for g, _, b in results.groups() if g == group})
-  for ax, scene in zip(axes[0], scenes):
-    for task in results.spec.tasks:
-      est = iqm_intervals({str(b): results.final(group, task, b, scene, metric) for b in budgets})
-      xs = [b for b in budgets if str(b) in est]
-      if xs:
-        mid = np.array([est[str(b)][0] for b in xs])
-        err = np.array([[m - est[str(b)][1], est[str(b)][2] - m] for b, m in zip(xs, mid)]).T
-        ax.errorbar(xs, mid, yerr=err, marker="o", capsize=3, label=task)
-    ax.set_xscale("log" if len(budgets) > 1 else "linear")
+COLUMNS = 4  # panels per row of the final figure
+
+
+def _final_panel(ax, results: StudyResults, group: str, scene: str, metric: str, budgets: list[int]) -> None:
+  """IQM [95 % CI] of metric over seeds per task: against the budget, or with one budget, per task."""
+  one = len(budgets) == 1
+  for i, task in enumerate(results.spec.tasks):
+    est = iqm_intervals({str(b): results.final(group, task, b, scene, metric) for b in budgets})
+    xs = [b for b in budgets if str(b) in est]
+    if xs:
+      mid = np.array([est[str(b)][0] for b in xs])
+      err = np.array([[m - est[str(b)][1], est[str(b)][2] - m] for b, m in zip(xs, mid)]).T
+      ax.errorbar([i] if one else xs, mid, yerr=err, marker="o", capsize=3, label=task, color=f"C{i % 10}")
+  if one:
+    ax.set_xticks(range(len(results.spec.tasks)), results.spec.tasks, rotation=60, ha="right", fontsize=7)
+    ax.set_xlim(-0.5, len(results.spec.tasks) - 0.5)
+  else:
+    ax.set_xscale("log")
     ax.set_xticks(budgets, [f"{b / 1e6:g}M" if b >= 100_000 else f"{b:,}" for b in budgets], minor=False)
     ax.minorticks_off()
-    ax.set_title(scene, fontsize=10)
     ax.set_xlabel("step budget")
-    ax.set_ylim(-0.05, 1.05)
-    ax.grid(alpha=0.3)
+  ax.set_title(scene, fontsize=10)
+  ax.set_ylim(-0.05, 1.05)
+  ax.grid(alpha=0.3)
+
+
+def final_figure(results: StudyResults, group: str, metric: str = "success"):
+  """One panel per evaluation scene (COLUMNS to a row): IQM of `metric` over seeds per budget, a
+  line per task (one budget: a point per task)."""
+  plt = _pyplot()
+  scenes = results.scenes()
+  rows, cols = -(-len(scenes) // COLUMNS), min(len(scenes), COLUMNS)
+  fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.6 * rows), constrained_layout=True, squeeze=False)
+  budgets = sorted({b for g, _, b in results.groups() if g == group})
+  for ax, scene in zip(axes.flat, scenes):
+    _final_panel(ax, results, group, scene, metric, budgets)
+  for ax in axes.flat[len(scenes):]:
+    ax.set_visible(False)
   axes[0][0].set_ylabel(f"{metric} (IQM, 95 % CI)")
-  axes[0][0].legend(fontsize=8)
-  fig.suptitle(f"{group}: {metric} per evaluation scene (100-trial evaluations of each run)")
+  if len(budgets) > 1:
+    axes[0][0].legend(fontsize=8)
+  budget = "" if len(budgets) > 1 else f" at {budgets[0]:,} steps"
+  fig.suptitle(f"{group}: {metric} per evaluation scene{budget} (evaluations of each run)")
   return fig
 
 
