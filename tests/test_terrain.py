@@ -154,9 +154,26 @@ def test_hardest_kind_pins_every_parameter_at_its_hard_end(kind):
   np.testing.assert_allclose(np.asarray(s.xi), np.tile(hard, (8, 1)), rtol=1e-6)
 
 
+def test_held_out_terrains_pin_their_kind_and_values_for_the_tasks_that_draw_it():
+  cfg = load_config("mixed-terrain", ["evaluation.held_out_terrain=[{name: tall, kind: uplift, values: [0.4, 0.6]}]"])
+  scene = make_scene(scene_config(cfg, "held-out/tall").scene)
+  s = jax.vmap(scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 4), 0.3)
+  assert scene.kinds == ("uplift",) and np.allclose(np.asarray(s.xi), [[0.4, 0.6]] * 4)
+  assert suite_scenes(load_config("waves", ["evaluation.held_out_terrain=[{name: tall, kind: uplift, values: [0.4, 0.6]}]"])) \
+      == ["hardest", "uniform"]  # a kind the task does not draw
+  with pytest.raises(ConfigError, match="names \\['tall'\\]"):
+    scene_config(cfg, "held-out/short")
+  with pytest.raises(ConfigError, match=r"evaluation.held_out_terrain\[0\].values: uplift takes \['height', 'length'\]"):
+    load_config("uplift", ["evaluation.held_out_terrain=[{name: a, kind: uplift, values: [0.3]}]"])
+  with pytest.raises(ConfigError, match="length must be in"):
+    load_config("uplift", ["evaluation.held_out_terrain=[{name: a, kind: uplift, values: [0.3, 9.0]}]"])
+
+
 def test_terrain_suites_and_bad_terrain_settings():
-  assert suite_scenes(load_config("uplift")) == ["hardest", "uniform"]
-  assert suite_scenes(load_config("mixed-terrain")) == ["hardest", "uniform", *(f"hardest/{k}" for k in KINDS)]
+  held = {k: [f"held-out/{h.name}" for h in load_config("uplift").evaluation.held_out_terrain if h.kind == k] for k in KINDS}
+  assert suite_scenes(load_config("uplift")) == ["hardest", "uniform", *held["uplift"]] and held["uplift"]
+  assert suite_scenes(load_config("mixed-terrain")) == ["hardest", "uniform", *(f"hardest/{k}" for k in KINDS),
+                                                       *(h for k in KINDS for h in held[k])]
   with pytest.raises(ConfigError, match="draws terrains"):
     scene_config(load_config("uplift"), "hardest/waves")
   with pytest.raises(ConfigError, match="scene.terrains"):

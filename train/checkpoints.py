@@ -56,6 +56,12 @@ def saved_steps(run_dir: str) -> list[int]:
   return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []
 
 
+def trained_to(run_dir: str, total: int | None) -> bool:
+  """Whether the run's newest checkpoint reaches `total` steps (a resume would train no further)."""
+  steps = saved_steps(run_dir)
+  return bool(steps) and total is not None and steps[-1] >= total
+
+
 def flatten_state(state) -> tuple[dict[str, np.ndarray], list[dict]]:
   """Host state -> ({leaf_NNNNN: array}, [{path, shape, dtype}]) in tree order."""
   leaves = jax.tree_util.tree_flatten_with_path(state)[0]

@@ -39,30 +39,40 @@ def suite_scenes(cfg: TaskConfig) -> list[str]:
   uniform and, with several kinds, each kind's hardest (terrain tasks); uniform (nav)."""
   s = cfg.scene
   if s.kind == "terrain":
-    return ["hardest", "uniform", *((HARDEST + k for k in s.terrains) if len(s.terrains) > 1 else ())]
+    return ["hardest", "uniform", *((HARDEST + k for k in s.terrains) if len(s.terrains) > 1 else ()),
+            *(HELD_OUT + h.name for h in cfg.evaluation.held_out_terrain if h.kind in s.terrains)]
   if s.kind != "stairs":
     return ["uniform"]
   return ["hardest", "uniform", *(HELD_OUT + h.name for h in cfg.evaluation.held_out)]
 
 
 def _held_out(cfg: TaskConfig, scene: str) -> TaskConfig:
-  """The task with every episode on one held-out staircase."""
-  named = {h.name: h for h in cfg.evaluation.held_out}
+  """The task with every episode on one held-out staircase (or terrain, of a kind it draws)."""
+  s, terrain = cfg.scene, cfg.scene.kind == "terrain"
+  named = ({h.name: h for h in cfg.evaluation.held_out_terrain if h.kind in s.terrains} if terrain
+           else {h.name: h for h in cfg.evaluation.held_out})
   h = named.get(scene[len(HELD_OUT):])
   if h is None:
-    raise ConfigError(f"scene {scene!r}: the task's evaluation.held_out names {sorted(named) or 'no staircase'}")
+    field = "held_out_terrain (of the kinds it draws)" if terrain else "held_out"
+    raise ConfigError(f"scene {scene!r}: the task's evaluation.{field} names {sorted(named) or 'none'}")
+  if terrain:
+    return dataclasses.replace(cfg, scene=_pinned_terrain(s, h.kind, h.values))
   pinned = {name: (getattr(h, name),) * 2 for name in STAIR_PARAMS}
-  return dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, sampler="uniform", **pinned))
+  return dataclasses.replace(cfg, scene=dataclasses.replace(s, sampler="uniform", **pinned))
+
+
+def _pinned_terrain(s: SceneConfig, kind: str, values) -> SceneConfig:
+  """Terrain scenes of one kind with its parameters pinned to values (in the kind's order)."""
+  ranges = dataclasses.replace(getattr(s.terrain, kind), **{n: (v, v) for n, v in zip(TERRAIN_PARAMS[kind].names, values)})
+  return dataclasses.replace(s, sampler="uniform", terrains=(kind,), terrain=dataclasses.replace(s.terrain, **{kind: ranges}))
 
 
 def _hardest_terrain(s: SceneConfig, kinds: tuple[str, ...]) -> SceneConfig:
   """Terrain scenes of the given kinds with every parameter of each at its hard end."""
-  pinned = {}
   for kind in kinds:
     ranges, p = getattr(s.terrain, kind), TERRAIN_PARAMS[kind]
-    pinned[kind] = dataclasses.replace(ranges, **{n: (getattr(ranges, n)[end == "high"],) * 2
-                                                  for n, end in zip(p.names, p.hard)})
-  return dataclasses.replace(s, sampler="uniform", terrains=kinds, terrain=dataclasses.replace(s.terrain, **pinned))
+    s = _pinned_terrain(s, kind, [getattr(ranges, n)[end == "high"] for n, end in zip(p.names, p.hard)])
+  return dataclasses.replace(s, terrains=kinds)
 
 
 def _hardest(s: SceneConfig, scene: str) -> SceneConfig:

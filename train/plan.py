@@ -65,12 +65,12 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   except json.JSONDecodeError as e:
     raise RunError(f"--resume {args.resume}: run.json is corrupt ({e})")
   total = meta["total_steps"] if args.steps is None else args.steps
-  from train.checkpoints import checkpoint_dir, saved_steps  # noqa: PLC0415  (orbax: only when resuming)
+  from train.checkpoints import checkpoint_dir, saved_steps, trained_to  # noqa: PLC0415  (orbax: only when resuming)
   steps = saved_steps(args.resume)
   if not steps:
     raise RunError(f"--resume {args.resume}: no checkpoint in {checkpoint_dir(args.resume)} to resume from")
   done = steps[-1]
-  if done >= total:
+  if trained_to(args.resume, total):
     raise RunError(f"run {meta['run_id']} is finished ({done:,} of {meta['total_steps']:,} steps); to train "
                    f"it further: --resume {args.resume} --steps N with N > {done:,}")
   preset = dataclasses.replace(get_preset(meta["algo"], meta["preset"]), num_envs=meta["num_envs"])

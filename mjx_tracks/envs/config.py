@@ -206,14 +206,33 @@ class HeldOutScene:
 
 
 @dataclasses.dataclass(frozen=True)
-class EvaluationConfig:
-  held_out: tuple[HeldOutScene, ...]  # stair tasks: fixed staircases of the evaluation suite
+class HeldOutTerrain:
+  """A fixed terrain of one kind every finished study run of a terrain task drawing that kind is
+  evaluated on: its parameters in the kind's order (scenes.terrain_kinds)."""
+  name: str
+  kind: str
+  values: tuple[float, ...]
 
   def validate(self, key: str) -> None:
-    names = [h.name for h in self.held_out]
-    require(len(set(names)) == len(names), f"{key}.held_out", f"names repeat: {names}")
-    for i, h in enumerate(self.held_out):
-      h.validate(f"{key}.held_out[{i}]")
+    require_plain_name(self.name, f"{key}.name")
+    require(self.kind in TERRAIN_PARAMS, f"{key}.kind", f"must be one of {list(TERRAIN_PARAMS)}, got {self.kind!r}")
+    p = TERRAIN_PARAMS[self.kind]
+    require(len(self.values) == len(p.names), f"{key}.values", f"{self.kind} takes {list(p.names)}, got {list(self.values)}")
+    for name, v, (lo, hi) in zip(p.names, self.values, p.limits):
+      require(lo <= v <= hi, f"{key}.values", f"{name} must be in [{lo}, {hi}], got {v}")
+
+
+@dataclasses.dataclass(frozen=True)
+class EvaluationConfig:
+  held_out: tuple[HeldOutScene, ...]  # stair tasks: fixed staircases of the evaluation suite
+  held_out_terrain: tuple[HeldOutTerrain, ...]  # terrain tasks: fixed terrains of the kinds they draw
+
+  def validate(self, key: str) -> None:
+    for field in ("held_out", "held_out_terrain"):
+      names = [h.name for h in getattr(self, field)]
+      require(len(set(names)) == len(names), f"{key}.{field}", f"names repeat: {names}")
+      for i, h in enumerate(getattr(self, field)):
+        h.validate(f"{key}.{field}[{i}]")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -354,7 +373,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("evaluation", "held_out"): [],  # before the evaluation suite: none
               ("control", "dof_curriculum"): [],  # before the DOF curriculum: every dimension acts
               ("scene", "terrains"): [],  # before terrain tasks: none
-              ("scene", "terrain"): FROM_DEFAULTS}
+              ("scene", "terrain"): FROM_DEFAULTS,
+              ("evaluation", "held_out_terrain"): FROM_DEFAULTS}  # evaluation only: old runs get today's
 
 
 def _with_added_keys(raw: dict) -> dict:

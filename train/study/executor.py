@@ -39,10 +39,9 @@ def run_id_in(run_folder: str) -> str | None:
 
 def _trained_to_the_end(run_folder: str) -> bool:
   """Whether the run's newest checkpoint is at its total steps (train.run refuses to resume it)."""
-  from train.checkpoints import saved_steps  # noqa: PLC0415  (JAX: only where a run came back)
-  path, steps = os.path.join(run_folder, "run.json"), saved_steps(run_folder)
-  total = json.load(open(path)).get("total_steps") if os.path.exists(path) else None
-  return bool(steps) and total is not None and steps[-1] >= total
+  from train.checkpoints import trained_to  # noqa: PLC0415  (JAX: only where a run came back)
+  path = os.path.join(run_folder, "run.json")
+  return trained_to(run_folder, json.load(open(path)).get("total_steps") if os.path.exists(path) else None)
 
 
 def read_cells(folder: str) -> dict:
