@@ -30,7 +30,7 @@ from scenes.terrain_kinds import TERRAIN_PARAMS
 SCENES = ("hardest", "uniform", "incremental", "train")
 
 
-HELD_OUT = "held-out/"  # scene name prefix of the task's fixed held-out staircases (evaluation.held_out)
+HELD_OUT = "held-out/"  # scene name prefix of the fixed held-out staircases / terrains (evaluation.held_out[_terrain])
 HARDEST = "hardest/"  # scene name prefix of one terrain kind's hardest configuration (terrain tasks)
 
 
