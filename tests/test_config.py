@@ -82,6 +82,19 @@ def test_a_run_config_from_before_contact_culling_keeps_every_contact():
   assert (physics.contact_slots, physics.box_pairs) == (-1, -1)
 
 
+def test_a_run_config_from_before_terrains_gets_none_drawn_and_todays_held_out_terrains():
+  """Terrain keys missing from an older run.json: no kinds drawn, the default ranges, and (an
+  evaluation-only key) today's held-out terrains."""
+  raw = load_config("uplift").to_dict()
+  for section, key in (("scene", "terrains"), ("scene", "terrain"), ("evaluation", "held_out_terrain")):
+    del raw[section][key]
+  raw["scene"]["kind"] = "stairs"
+  cfg = from_dict(raw)
+  today = load_config("uplift")
+  assert cfg.scene.terrains == () and cfg.scene.terrain == today.scene.terrain
+  assert cfg.evaluation.held_out_terrain == today.evaluation.held_out_terrain != ()
+
+
 def test_renamed_curriculum_variants_say_their_new_names():
   with pytest.raises(ConfigError, match="'original' is now 'original_code'"):
     load_config("asc-inc-cog", ["scene.variant=original"])

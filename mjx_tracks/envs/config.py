@@ -113,11 +113,13 @@ def _terrain_ranges_class():
 TerrainRanges = _terrain_ranges_class()
 
 
-def _validate_terrain(kinds: tuple[str, ...], ranges, key: str) -> None:
-  """The kinds a terrain task draws, and every kind's ranges against what its generator supports."""
-  require(bool(kinds) and all(k in TERRAIN_PARAMS for k in kinds), f"{key}.terrains",
-          f"a terrain task needs a non-empty list of {list(TERRAIN_PARAMS)}, got {list(kinds)}")
-  require(len(set(kinds)) == len(kinds), f"{key}.terrains", f"has duplicates: {list(kinds)}")
+def _validate_terrain(kinds: tuple[str, ...], ranges, key: str, terrain_task: bool) -> None:
+  """The kinds a terrain task draws, and every kind's ranges (any task's) against what its
+  generator supports."""
+  if terrain_task:
+    require(bool(kinds) and all(k in TERRAIN_PARAMS for k in kinds), f"{key}.terrains",
+            f"a terrain task needs a non-empty list of {list(TERRAIN_PARAMS)}, got {list(kinds)}")
+    require(len(set(kinds)) == len(kinds), f"{key}.terrains", f"has duplicates: {list(kinds)}")
   for kind, p in TERRAIN_PARAMS.items():
     for name, (lo, hi) in zip(p.names, p.limits):
       r = getattr(getattr(ranges, kind), name)
@@ -153,8 +155,7 @@ class SceneConfig:
     from scenes.samplers import SAMPLERS, VARIANTS  # noqa: PLC0415
     from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
     require(self.kind in SCENE_KINDS, f"{key}.kind", f"must be one of {SCENE_KINDS}, got {self.kind!r}")
-    if self.kind == "terrain":
-      _validate_terrain(self.terrains, self.terrain, key)
+    _validate_terrain(self.terrains, self.terrain, key, self.kind == "terrain")
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
     require(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
     hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
