@@ -12,6 +12,9 @@ gap C ~ U(C_min, C_max) = U(1, 2) m (the original's 1 + U(0, 1)):
 Components are drawn as u in [0, 1]^5 by the scene's sampler (uniform or incremental over unit
 ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or random x ~ U(0.5, 1.5),
 y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2). Goal: fixed (11, 0), or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
+Floor obstacles (`floor_obstacles` of them, 0 by default): low boxes to drive over or around, each
+centred at x ~ U(2.5, 9.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
+height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays.
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ START_X, GOAL_X, AREA_LEN = 2.0, 10.0, 12.0  # m
 GAP = (1.0, 2.0)  # m, C range
 WALL_THICKNESS = 0.3  # m, zigzag walls
 OBSTACLE_HEIGHT = 1.0  # m
+FLOOR_X, FLOOR_Y, FLOOR_SIDE = (START_X + 0.5, GOAL_X - 0.5), (-AREA_W / 2 + 0.5, AREA_W / 2 - 0.5), (0.3, 0.8)  # m
+MAX_FLOOR_OBSTACLES = 12
 UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
               integer=(False,) * 5, hard=("high", "high", "high", "high", "low"))
 # hardest: obstacles jutting furthest and longest, the narrowest gap C
@@ -50,10 +55,14 @@ class NavScene:
   kinds: tuple[str, ...]  # of ("hallway", "zigzag"), drawn with equal probability
   random_spawn: bool
   random_goal: bool
+  floor_obstacles: int = 0  # low boxes in the obstacle area
+  floor_height: tuple[float, float] = (0.05, 0.15)  # m, their height ~ U(min, max)
 
   def __post_init__(self):
     if not self.kinds or any(k not in ("hallway", "zigzag") for k in self.kinds):
       raise ValueError(f"nav kinds must be a non-empty subset of ('hallway', 'zigzag'), got {self.kinds}")
+    if not 0 <= self.floor_obstacles <= MAX_FLOOR_OBSTACLES:
+      raise ValueError(f"floor obstacles must number 0..{MAX_FLOOR_OBSTACLES}, got {self.floor_obstacles}")
 
   direction = "flat"
 
@@ -61,7 +70,7 @@ class NavScene:
     w = world_geom_attrs()
     h = AREA_W / 2
     boxes = "\n".join(f'<geom name="{SCENE_BOX}{k}" type="box" pos="{-20 - 3 * k} 0 -5" size="0.1 0.1 0.1" '
-                      f'{w} rgba=".6 .4 .3 1"/>' for k in range(2))
+                      f'{w} rgba=".6 .4 .3 1"/>' for k in range(2 + self.floor_obstacles))
     return f"""
     <geom name="floor" type="plane" size="0 0 1" {w} rgba=".5 .55 .5 1"/>
     <geom name="wall_left" type="plane" pos="0 {h} 0" zaxis="0 -1 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
@@ -103,4 +112,16 @@ class NavScene:
     g = jax.random.uniform(k_g, (2,))
     goal = (jnp.array([_lerp(10.5, 11.5, g[0]), _lerp(-4.0, 4.0, g[1]), 0.085]) if self.random_goal
             else jnp.array([11.0, 0.0, 0.085]))
+    if self.floor_obstacles:
+      f_pos, f_size = self.floor_boxes(jax.random.fold_in(key, 1))
+      pos, size = jnp.concatenate([pos, f_pos]), jnp.concatenate([size, f_size])
     return SceneState(pos, size, spawn, yaw, goal, jnp.float32(0.0), xi, variant.astype(jnp.int32))
+
+  def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the
+    module docstring)."""
+    u = jax.random.uniform(key, (self.floor_obstacles, 5))
+    height = _lerp(*self.floor_height, u[:, 4])
+    pos = jnp.stack([_lerp(*FLOOR_X, u[:, 0]), _lerp(*FLOOR_Y, u[:, 1]), height / 2], axis=-1)
+    size = jnp.stack([_lerp(*FLOOR_SIDE, u[:, 2]) / 2, _lerp(*FLOOR_SIDE, u[:, 3]) / 2, height / 2], axis=-1)
+    return pos, size

@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 from mujoco import mjx
 
+import mjx_tracks
+
 from mjx_tracks.envs.config import default_config, load_config
 from mjx_tracks.envs.task_env import make_scene
 from scenes.navigation import AREA_W
@@ -117,6 +119,30 @@ def test_navigation_kinds_are_equally_likely_and_leave_a_gap():
   assert (w1[zig] >= AREA_W / 2 - c[zig] / 2 - 1e-4).all() and (AREA_W - w1[zig] >= c[zig] - 1e-4).all()
   # zigzag walls jut from alternating sides and together span at least W - C of the width
   assert (w1[zig] + w2[zig] >= AREA_W - c[zig] - 1e-4).all()
+
+
+def test_floor_obstacles_lie_in_the_obstacle_area_with_their_drawn_sizes_and_heights():
+  scene = make_scene(load_config("nav-obstacles").scene)
+  n = scene.floor_obstacles
+  s = jax.jit(jax.vmap(scene.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(5), 500), 0.0)
+  pos, size = np.asarray(s.box_pos[:, 2:]), np.asarray(s.box_size[:, 2:])
+  assert pos.shape == (500, n, 3)
+  for lo, hi, x in ((2.5, 9.5, pos[..., 0]), (-4.5, 4.5, pos[..., 1]), (0.15, 0.4, size[..., 0]), (0.15, 0.4, size[..., 1]),
+                    (0.05, 0.15, 2 * size[..., 2])):
+    assert x.min() >= lo - 1e-5 and x.max() <= hi + 1e-5
+    assert abs(x.mean() - (lo + hi) / 2) < 0.02 * (hi - lo) + 1e-3  # U(lo, hi): mean within 2 % of the range
+  np.testing.assert_allclose(pos[..., 2], size[..., 2])  # resting on the floor
+  sim = mjx_tracks.load("nav-obstacles").sim
+  c = sim.c_model_with_boxes(s.box_pos[0], s.box_size[0])
+  d = mujoco.MjData(c)
+  mujoco.mj_forward(c, d)
+  all_pos, all_size = np.asarray(s.box_pos[0]), np.asarray(s.box_size[0])
+  for k in range(n):  # a ray straight down onto each obstacle's centre hits the top of the tallest box there
+    x, y = pos[0, k, :2]
+    top = 5.0 - mujoco.mj_ray(c, d, np.array([x, y, 5.0]), np.array([0.0, 0, -1]),
+                              np.array([1, 0, 0, 0, 0, 0], np.uint8), 1, -1, np.zeros(1, np.int32))
+    over = (np.abs(all_pos[:, 0] - x) <= all_size[:, 0]) & (np.abs(all_pos[:, 1] - y) <= all_size[:, 1])
+    assert top == pytest.approx((all_pos[over, 2] + all_size[over, 2]).max(), abs=1e-5)
 
 
 def test_a_long_staircase_task_sizes_its_box_pool_and_places_every_step():

@@ -140,6 +140,8 @@ class SceneConfig:
   riser: tuple[float, float]  # m, h
   steps: tuple[int, int]  # n
   nav_kinds: tuple[str, ...]
+  nav_floor_obstacles: int = dataclasses.field(metadata=bound(0, 12))  # nav: low boxes in the obstacle area
+  nav_floor_height: tuple[float, float]  # m, nav: their height ~ U(min, max)
   terrains: tuple[str, ...]  # terrain: the kinds drawn per episode (scenes.terrain)
   terrain: TerrainRanges  # every terrain kind's parameter ranges
   random_spawn: bool
@@ -156,6 +158,8 @@ class SceneConfig:
     from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
     require(self.kind in SCENE_KINDS, f"{key}.kind", f"must be one of {SCENE_KINDS}, got {self.kind!r}")
     _validate_terrain(self.terrains, self.terrain, key, self.kind == "terrain")
+    lo, hi = self.nav_floor_height
+    require(0.01 <= lo <= hi <= 0.5, f"{key}.nav_floor_height", f"needs 0.01 <= min <= max <= 0.5, got {[lo, hi]}")
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
     require(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
     hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
@@ -374,6 +378,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("evaluation", "held_out"): [],  # before the evaluation suite: none
               ("control", "dof_curriculum"): [],  # before the DOF curriculum: every dimension acts
               ("scene", "terrains"): [],  # before terrain tasks: none
+              ("scene", "nav_floor_obstacles"): 0,  # before floor obstacles: none
+              ("scene", "nav_floor_height"): FROM_DEFAULTS,
               ("scene", "terrain"): FROM_DEFAULTS,
               ("evaluation", "held_out_terrain"): FROM_DEFAULTS}  # evaluation only: old runs get today's
 

@@ -60,7 +60,8 @@ def make_scene(s: SceneConfig) -> StairScene | NavScene | TerrainScene:
   if s.kind == "terrain":
     ranges = terrain_ranges(s.terrains, {k: dataclasses.asdict(getattr(s.terrain, k)) for k in s.terrains})
     return TerrainScene(s.terrains, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
-  return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal)
+  return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,
+                  s.nav_floor_height)
 
 
 class TrackedRobotEnv(Env):
