@@ -92,39 +92,46 @@ def _stairs(treads, riser, steps):
 
 
 def step_up(xi, key):
+  """One step of height xi[0], climbed."""
   pos, size, edge, top = _stairs(jnp.full(POOL, LANDING_LENGTH), xi[0], jnp.int32(1))
   return pos, size, _forward(edge, top)
 
 
 def step_down(xi, key):
+  """One step of height xi[0], driven down."""
   pos, size, edge, top = _stairs(jnp.full(POOL, LANDING_LENGTH), xi[0], jnp.int32(1))
   return pos, size, _backward(edge, top)
 
 
 def _landing_treads(xi):
+  """Per-step treads of a mid-landing staircase (step steps // 2 is the landing) and its step count."""
   tread, steps, landing = xi[0], xi[2].astype(jnp.int32), xi[3]
   return jnp.where(jnp.arange(POOL) == steps // 2 - 1, landing, tread), steps
 
 
 def landing_up(xi, key):
+  """A mid-landing staircase, climbed."""
   treads, steps = _landing_treads(xi)
   pos, size, edge, top = _stairs(treads, xi[1], steps)
   return pos, size, _forward(edge, top)
 
 
 def landing_down(xi, key):
+  """A mid-landing staircase, descended."""
   treads, steps = _landing_treads(xi)
   pos, size, edge, top = _stairs(treads, xi[1], steps)
   return pos, size, _backward(edge, top)
 
 
 def uplift(xi, key):
+  """One box of height xi[0] and length xi[1] to cross."""
   height, length = xi[0], xi[1]
   pos, size = _row(jnp.zeros(1), length[None], height[None])
   return *_pool(pos, size), _forward(length, 0.0 * length)
 
 
 def rails(xi, key):
+  """RAILS bars of height xi[0], their fronts xi[1] apart."""
   height, gap = xi[0], xi[1]
   x0 = jnp.arange(RAILS) * gap
   pos, size = _row(x0, jnp.full(RAILS, RAIL_THICKNESS), jnp.full(RAILS, height))
@@ -132,6 +139,7 @@ def rails(xi, key):
 
 
 def waves(xi, key):
+  """WAVES cosine bumps of crest xi[0] and wavelength xi[1], WAVE_SEGMENTS boxes each."""
   amplitude, wavelength = xi[0], xi[1]
   n = WAVES * WAVE_SEGMENTS
   seg = wavelength / WAVE_SEGMENTS
@@ -142,6 +150,7 @@ def waves(xi, key):
 
 
 def blocks(xi, key):
+  """A grid of stepping blocks up to xi[0] high, xi[1] long, heights drawn from key."""
   height, length = xi[0], xi[1]
   row, col = jnp.divmod(jnp.arange(BLOCK_ROWS * BLOCK_COLS), BLOCK_COLS)
   tops = height * jax.random.uniform(key, (BLOCK_ROWS * BLOCK_COLS,), minval=BLOCK_MIN, maxval=1.0)  # ~ U(0.2, 1) height
