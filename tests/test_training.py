@@ -215,8 +215,8 @@ def test_the_suite_evaluates_every_scene_at_every_milestone_with_its_own_policy(
   shutil.copytree(out, run_dir)
   dbmod.ExperimentDB(database).import_runs(os.path.join(os.path.dirname(out), "db.sqlite"))
   assert load_policy_info(os.path.join(run_dir, "milestones", "1024"))["step"] == 1024
-  for _ in range(2):
-    assert evaluate.main([run_dir, "--suite", "--milestones", "--trials", "2", "--db", database]) == 0
+  assert evaluate.main([run_dir, "--suite", "--milestones", "--trials", "2", "--db", database]) == 0
+  assert evaluate.main([run_dir, "--scene", "hardest", "--milestones", "--trials", "2", "--db", database]) == 0
   scenes = ["hardest", "uniform", f"held-out/{HELD_OUT}"]
   for scene in scenes:
     for budget, step in ((1024, 1024), (None, 2048)):
@@ -225,7 +225,7 @@ def test_the_suite_evaluates_every_scene_at_every_milestone_with_its_own_policy(
   rows = dbmod.ExperimentDB(database).evals(run_id(out))
   assert sorted({(e["scene"], e["budget"]) for e in rows}, key=str) == sorted(
       {(s, b) for s in scenes for b in (1024, None)}, key=str)
-  assert len(rows) == len(scenes) * 2 * 2  # evaluated twice: replaced, not duplicated
+  assert len(rows) == len(scenes) * 2 * 2  # hardest evaluated twice: replaced, not duplicated
   held = json.load(open(evaluate.report_path(run_dir, f"held-out/{HELD_OUT}", None)))["per_trial"]
   assert max(held["progress"]) - min(held["progress"]) < 1e-6  # one fixed staircase, no random spawn
 
