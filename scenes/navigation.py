@@ -12,7 +12,7 @@ gap C ~ U(C_min, C_max) = U(1, 2) m (the original's 1 + U(0, 1)):
 Components are drawn as u in [0, 1]^5 by the scene's sampler (uniform or incremental over unit
 ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or random x ~ U(0.5, 1.5),
 y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2). Goal: fixed (11, 0), or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
-Floor obstacles (`floor_obstacles` of them, 0 by default): low boxes to drive over or around, each
+Floor obstacles (`floor_obstacles` of them): low boxes to drive over or around, each
 centred at x ~ U(2.5, 9.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
 height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays.
 """
@@ -55,8 +55,8 @@ class NavScene:
   kinds: tuple[str, ...]  # of ("hallway", "zigzag"), drawn with equal probability
   random_spawn: bool
   random_goal: bool
-  floor_obstacles: int = 0  # low boxes in the obstacle area
-  floor_height: tuple[float, float] = (0.05, 0.15)  # m, their height ~ U(min, max)
+  floor_obstacles: int  # low boxes in the obstacle area (0..MAX_FLOOR_OBSTACLES)
+  floor_height: tuple[float, float]  # m, their height ~ U(min, max)
 
   def __post_init__(self):
     if not self.kinds or any(k not in ("hallway", "zigzag") for k in self.kinds):

@@ -18,6 +18,7 @@ import yaml
 
 from mjx_tracks.bounds import bound, violation
 from mjx_tracks.sim.physics import PhysicsConfig
+from scenes.navigation import MAX_FLOOR_OBSTACLES
 from scenes.terrain_kinds import TERRAIN_PARAMS
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
@@ -140,7 +141,7 @@ class SceneConfig:
   riser: tuple[float, float]  # m, h
   steps: tuple[int, int]  # n
   nav_kinds: tuple[str, ...]
-  nav_floor_obstacles: int = dataclasses.field(metadata=bound(0, 12))  # nav: low boxes in the obstacle area
+  nav_floor_obstacles: int = dataclasses.field(metadata=bound(0, MAX_FLOOR_OBSTACLES))  # nav: low boxes in the obstacle area
   nav_floor_height: tuple[float, float]  # m, nav: their height ~ U(min, max)
   terrains: tuple[str, ...]  # terrain: the kinds drawn per episode (scenes.terrain)
   terrain: TerrainRanges  # every terrain kind's parameter ranges

@@ -73,9 +73,9 @@ def generalization_table(results: StudyResults) -> list[str]:
     if task not in mixed:
       continue
     for kind in kinds[task].terrains:
-      own = iqm_intervals({"x": results.final(group, task, budget, HARDEST + kind, "success")}).get("x")
-      special = [(t, iqm_intervals({"x": results.final(group, t, budget, "hardest", "success")}).get("x"))
-                 for t, s in kinds.items() if s.kind == "terrain" and s.terrains == (kind,)]
+      success = lambda t, scene: iqm_intervals({"x": results.final(group, t, budget, scene, "success")}).get("x")  # noqa: E731
+      own = success(task, HARDEST + kind)
+      special = [(t, success(t, "hardest")) for t, s in kinds.items() if s.kind == "terrain" and s.terrains == (kind,)]
       lines.append(f"| {group} | {budget:,} | {kind} | {_ci(own)} | "
                    f"{'; '.join(f'{t}: {_ci(e)}' for t, e in special) or '-'} |")
   head = ["| group | budget | terrain kind | mixed policy, success on its hardest | specialist policy, success on its hardest |",
