@@ -115,7 +115,7 @@ class NavScene:
     if self.floor_obstacles:
       f_pos, f_size = self.floor_boxes(jax.random.fold_in(key, 1))
       pos, size = jnp.concatenate([pos, f_pos]), jnp.concatenate([size, f_size])
-    return SceneState(pos, size, spawn, yaw, goal, jnp.float32(0.0), xi, variant.astype(jnp.int32))
+    return SceneState(pos, size, jnp.zeros(pos.shape[0]), spawn, yaw, goal, jnp.float32(0.0), xi, variant.astype(jnp.int32))
 
   def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the

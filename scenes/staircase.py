@@ -49,18 +49,19 @@ class Staircase:
     return self.steps * self.riser
 
 
-def world_xml(n_max: int = N_MAX) -> str:
-  """Floor, side walls (planes at y = +-WIDTH/2) and the pool of step boxes."""
+def world_xml(n_max: int = N_MAX, walls: bool = True) -> str:
+  """Floor, side walls (planes at y = +-WIDTH/2; none if not walls) and the pool of step boxes."""
   world = world_geom_attrs()
   half = WIDTH / 2
   steps = "\n".join(
       f'<geom name="{SCENE_BOX}{k}" type="box" pos="{PARK[0] - k} {PARK[1]} {PARK[2]}" '
       f'size="0.1 0.1 0.1" {world} rgba=".7 .7 .65 1"/>' for k in range(n_max))
   # planes' normals point into the corridor (a plane's normal is its local +z)
-  return f"""
-    <geom name="floor" type="plane" size="0 0 1" {world} rgba=".5 .55 .5 1"/>
+  side = f"""
     <geom name="wall_left" type="plane" pos="0 {half} 0" zaxis="0 -1 0" size="0 0 1" {world} rgba=".6 .6 .7 .3"/>
-    <geom name="wall_right" type="plane" pos="0 {-half} 0" zaxis="0 1 0" size="0 0 1" {world} rgba=".6 .6 .7 .3"/>
+    <geom name="wall_right" type="plane" pos="0 {-half} 0" zaxis="0 1 0" size="0 0 1" {world} rgba=".6 .6 .7 .3"/>"""
+  return f"""
+    <geom name="floor" type="plane" size="0 0 1" {world} rgba=".5 .55 .5 1"/>{side if walls else ""}
     {steps}"""
 
 
@@ -196,4 +197,4 @@ class StairScene:
     # the goal is a line across the staircase (the stair modes cannot steer nor observe lateral
     # drift); a random goal is a point with a random lateral offset, for modes that steer
     halfwidth = jnp.float32(0.0 if self.random_goal else GOAL_HALFWIDTH)
-    return SceneState(pos, size, spawn, yaw, goal, halfwidth, xi, jnp.int32(0))
+    return SceneState(pos, size, jnp.zeros(pos.shape[0]), spawn, yaw, goal, halfwidth, xi, jnp.int32(0))

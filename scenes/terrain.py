@@ -19,8 +19,11 @@ the terrain, 0.085 m above the ground there, unless said otherwise:
   landing_up(tread, riser, steps, landing): a staircase (scenes.staircase) whose step steps // 2
                             (1-based) has a mid landing `landing` long; ascent.
   landing_down(...):        the same staircase, descended (spawn on the top landing, goal in front).
-Every kind's world is the same: the corridor and POOL boxes (a kind parks those it does not use),
-so the tasks of different kinds compile to the same program.
+  spiral_up(radius, angle, riser, steps), spiral_down(...): spiral staircases (scenes.spiral),
+                            yawed boxes in the open (no side walls), with point goals.
+Every corridor kind's world is the same: the corridor and POOL boxes (a kind parks those it does not
+use), so the tasks of different kinds compile to the same program; the spirals' world is the same
+without the walls, so a task draws corridor kinds or spirals, not both.
 """
 
 from __future__ import annotations
@@ -31,11 +34,10 @@ from typing import Callable
 import jax
 import jax.numpy as jnp
 import numpy as np
-from flax import struct
 
-from scenes import samplers
+from scenes import samplers, spiral
 from scenes.samplers import Ranges
-from scenes.scene import SceneState
+from scenes.scene import Ends, SceneState
 from scenes.staircase import (GOAL_ABOVE_TREAD, GOAL_HALFWIDTH, GOAL_PAST_EDGE, LANDING_LENGTH,
                               SPAWN_BEFORE_STAIRS, WIDTH, boxes_from_treads, park_unused, randomized_ends,
                               tread_starts, world_xml)
@@ -49,24 +51,16 @@ BLOCK_MIN = 0.2  # lowest block, as a fraction of `height`
 MIN_HALF = 1e-3  # m, the thinnest half-size a box keeps (a box of zero size is no box)
 
 
-@struct.dataclass
-class Ends:
-  """Where an episode on a terrain starts and ends: spawn ground point (m), yaw (rad), goal (m)."""
-  spawn: jax.Array
-  yaw: jax.Array
-  goal: jax.Array
-
-
 def _forward(end_x, end_z) -> Ends:
   """Spawn 1 m before x = 0 facing +x; goal 1 m past end_x at ground height end_z."""
   return Ends(jnp.array([-SPAWN_BEFORE_STAIRS, 0.0, 0.0]), jnp.float32(0.0),
-              jnp.stack([end_x + GOAL_PAST_EDGE, 0.0 * end_x, end_z + GOAL_ABOVE_TREAD]))
+              jnp.stack([end_x + GOAL_PAST_EDGE, 0.0 * end_x, end_z + GOAL_ABOVE_TREAD]), jnp.float32(GOAL_HALFWIDTH))
 
 
 def _backward(edge_x, top_z) -> Ends:
   """Spawn on a top landing 1 m past its edge edge_x facing -x; goal on the floor 1 m before x = 0."""
   return Ends(jnp.stack([edge_x + GOAL_PAST_EDGE, 0.0 * edge_x, top_z]), jnp.float32(jnp.pi),
-              jnp.array([-GOAL_PAST_EDGE, 0.0, GOAL_ABOVE_TREAD]))
+              jnp.array([-GOAL_PAST_EDGE, 0.0, GOAL_ABOVE_TREAD]), jnp.float32(GOAL_HALFWIDTH))
 
 
 def _row(x0, length, top, y0=None, width=None) -> tuple[jax.Array, jax.Array]:
@@ -78,29 +72,29 @@ def _row(x0, length, top, y0=None, width=None) -> tuple[jax.Array, jax.Array]:
   return pos, size
 
 
-def _pool(pos, size) -> tuple[jax.Array, jax.Array]:
-  """k boxes padded to POOL with parked ones."""
+def _pool(pos, size) -> tuple[jax.Array, jax.Array, jax.Array]:
+  """k axis-aligned boxes padded to POOL with parked ones: centres, half-sizes, yaws."""
   k = pos.shape[0]
   pad = lambda a: jnp.concatenate([a, jnp.zeros((POOL - k, 3), a.dtype)])  # noqa: E731
-  return park_unused(pad(pos), pad(size), jnp.arange(POOL) < k)
+  return *park_unused(pad(pos), pad(size), jnp.arange(POOL) < k), jnp.zeros(POOL)
 
 
 def _stairs(treads, riser, steps):
-  """A staircase's pool, its top edge x and its top height (m)."""
+  """A staircase's pool (centres, half-sizes, yaws), its top edge x and its top height (m)."""
   pos, size = boxes_from_treads(treads, riser, steps)
-  return pos, size, tread_starts(treads)[steps - 1], steps * riser
+  return pos, size, jnp.zeros(POOL), tread_starts(treads)[steps - 1], steps * riser
 
 
 def step_up(xi, key):
   """One step of height xi[0], climbed."""
-  pos, size, edge, top = _stairs(jnp.full(POOL, LANDING_LENGTH), xi[0], jnp.int32(1))
-  return pos, size, _forward(edge, top)
+  pos, size, yaw, edge, top = _stairs(jnp.full(POOL, LANDING_LENGTH), xi[0], jnp.int32(1))
+  return pos, size, yaw, _forward(edge, top)
 
 
 def step_down(xi, key):
   """One step of height xi[0], driven down."""
-  pos, size, edge, top = _stairs(jnp.full(POOL, LANDING_LENGTH), xi[0], jnp.int32(1))
-  return pos, size, _backward(edge, top)
+  pos, size, yaw, edge, top = _stairs(jnp.full(POOL, LANDING_LENGTH), xi[0], jnp.int32(1))
+  return pos, size, yaw, _backward(edge, top)
 
 
 def _landing_treads(xi):
@@ -112,15 +106,15 @@ def _landing_treads(xi):
 def landing_up(xi, key):
   """A mid-landing staircase, climbed."""
   treads, steps = _landing_treads(xi)
-  pos, size, edge, top = _stairs(treads, xi[1], steps)
-  return pos, size, _forward(edge, top)
+  pos, size, yaw, edge, top = _stairs(treads, xi[1], steps)
+  return pos, size, yaw, _forward(edge, top)
 
 
 def landing_down(xi, key):
   """A mid-landing staircase, descended."""
   treads, steps = _landing_treads(xi)
-  pos, size, edge, top = _stairs(treads, xi[1], steps)
-  return pos, size, _backward(edge, top)
+  pos, size, yaw, edge, top = _stairs(treads, xi[1], steps)
+  return pos, size, yaw, _backward(edge, top)
 
 
 def uplift(xi, key):
@@ -160,9 +154,11 @@ def blocks(xi, key):
   return *_pool(pos, size), _forward(BLOCK_ROWS * length, 0.0 * length)
 
 
-LAYOUTS: dict[str, Callable] = {  # kind -> layout(xi, key) -> (box centres, half-sizes (POOL, 3), Ends)
+LAYOUTS: dict[str, Callable] = {  # kind -> layout(xi, key) -> (box centres, half-sizes (POOL, 3), yaws (POOL,), Ends)
     "step_up": step_up, "step_down": step_down, "uplift": uplift, "rails": rails, "waves": waves,
-    "blocks": blocks, "landing_up": landing_up, "landing_down": landing_down}
+    "blocks": blocks, "landing_up": landing_up, "landing_down": landing_down,
+    "spiral_up": lambda xi, key: spiral.spiral_up(xi, key, POOL),
+    "spiral_down": lambda xi, key: spiral.spiral_down(xi, key, POOL)}
 assert set(LAYOUTS) == set(TERRAIN_PARAMS)
 
 
@@ -197,11 +193,21 @@ class TerrainScene:
     unknown = [k for k in self.kinds if k not in TERRAIN_PARAMS]
     if not self.kinds or unknown:
       raise ValueError(f"terrain kinds must be a non-empty list of {sorted(TERRAIN_PARAMS)}, got {list(self.kinds)}")
+    if len({TERRAIN_PARAMS[k].corridor for k in self.kinds}) > 1:
+      raise ValueError(f"terrain kinds {list(self.kinds)} mix corridor kinds with spirals (which stand in the open)")
+    if not self.corridor and (self.random_spawn or self.random_goal):
+      raise ValueError("spiral terrains place their spawn and goal on the stairs' centre line: "
+                       "random_spawn and random_goal are not supported")
+
+  @property
+  def corridor(self) -> bool:
+    """Whether the world has the corridor's side walls (every kind but the spirals)."""
+    return TERRAIN_PARAMS[self.kinds[0]].corridor
 
   n_boxes = POOL
 
   def world_xml(self) -> str:
-    return world_xml(POOL)
+    return world_xml(POOL, walls=self.corridor)
 
   def offsets(self) -> np.ndarray:
     """Where each kind's parameters start in xi."""
@@ -219,14 +225,14 @@ class TerrainScene:
     k_kind, k_xi, k_layout, *k_ends = jax.random.split(key, 7)
     kind = jax.random.randint(k_kind, (), 0, len(self.kinds))  # kind ~ U{kinds}
     xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant)
-    pos, size, e = self.layout(kind, xi, k_layout)
+    pos, size, box_yaw, e = self.layout(kind, xi, k_layout)
     ahead = jnp.where(e.yaw == 0.0, 1.0, -1.0)
     spawn, yaw, goal = randomized_ends(k_ends, e.spawn, e.yaw, e.goal, ahead, self.random_spawn, self.random_goal)
-    halfwidth = jnp.float32(0.0 if self.random_goal else GOAL_HALFWIDTH)
-    return SceneState(pos, size, spawn, yaw, goal, halfwidth, xi, kind.astype(jnp.int32))
+    halfwidth = jnp.float32(0.0) if self.random_goal else e.goal_halfwidth
+    return SceneState(pos, size, box_yaw, spawn, yaw, goal, halfwidth, xi, kind.astype(jnp.int32))
 
 
-def _flat(pos, size, ends: Ends):
+def _flat(pos, size, yaw, ends: Ends):
   """lax.switch branches must return arrays of one structure and dtype."""
   f = lambda a: jnp.asarray(a, jnp.float32)  # noqa: E731
-  return f(pos), f(size), Ends(f(ends.spawn), f(ends.yaw), f(ends.goal))
+  return f(pos), f(size), f(yaw), jax.tree.map(f, ends)

@@ -4,6 +4,8 @@ generator supports and which are integers. Task configs name their ranges by the
 from __future__ import annotations
 
 import dataclasses
+import math
+from typing import Callable
 
 MAX_STEPS = 15  # the longest staircase (box pool) a task may ask for
 TREAD_LIMITS, RISER_LIMITS = (0.1, 1.0), (0.01, 0.4)  # m, what the staircase generator supports
@@ -16,11 +18,26 @@ class TerrainParams:
   hard: tuple[str, ...]  # "low" (harder when smaller) or "high"
   limits: tuple[tuple[float, float], ...]  # what the generator supports (m, or a count)
   integer: tuple[bool, ...]
+  corridor: bool = True  # laid out in the 2 m corridor between side walls (else open, no walls)
+  check: Callable[[tuple[float, ...]], str] = lambda xi: ""  # what is wrong with a parameter set ("": fine)
 
 
 _STEP = TerrainParams(("height",), ("high",), ((0.01, 0.6),), (False,))  # m
 _LANDING = TerrainParams(("tread", "riser", "steps", "landing"), ("low", "high", "high", "low"),
                          (TREAD_LIMITS, RISER_LIMITS, (3, MAX_STEPS), (0.3, 3.0)), (False, False, True, False))
+MAX_TURN = math.pi  # rad, the most a spiral turns before its landing: (steps - 1) angle
+
+
+def _spiral_check(xi: tuple[float, ...]) -> str:
+  """A spiral turns at most MAX_TURN before its landing (so its landing clears its first steps)."""
+  radius, angle, riser, steps = xi
+  return "" if (steps - 1) * angle <= MAX_TURN + 1e-9 else \
+      f"(steps - 1) x angle = {(steps - 1) * angle:.3g} rad must be <= pi"
+
+
+_SPIRAL = TerrainParams(("radius", "angle", "riser", "steps"), ("low", "low", "high", "high"),
+                        ((1.2, 20.0), (0.05, 1.0), RISER_LIMITS, (2, MAX_STEPS)), (False, False, False, True),
+                        corridor=False, check=_spiral_check)
 TERRAIN_PARAMS: dict[str, TerrainParams] = {
     "step_up": _STEP,
     "step_down": _STEP,
@@ -30,4 +47,6 @@ TERRAIN_PARAMS: dict[str, TerrainParams] = {
     "blocks": TerrainParams(("height", "length"), ("high", "low"), ((0.01, 0.4), (0.2, 1.0)), (False, False)),
     "landing_up": _LANDING,
     "landing_down": _LANDING,
+    "spiral_up": _SPIRAL,
+    "spiral_down": _SPIRAL,
 }

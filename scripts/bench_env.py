@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     state, env_compile, env_s = time_env_step(core, n, args.reps)
 
     def bare(es, belts, targets):  # the simulator alone on the same scenes
-      m = sim.with_boxes(es.scene.box_pos, es.scene.box_size)
+      m = sim.with_boxes(es.scene.box_pos, es.scene.box_size, es.scene.box_yaw)
       return es.replace(data=sim.advance(m, es.data, belts, targets, k))
 
     belts = jnp.full((n, 6), 0.5)

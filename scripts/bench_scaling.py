@@ -35,7 +35,7 @@ def bare_step_s(core, state, reps: int) -> float:
   sim, k = core.sim, core.substeps
 
   def bare(es):
-    m = sim.with_boxes(es.scene.box_pos, es.scene.box_size)
+    m = sim.with_boxes(es.scene.box_pos, es.scene.box_size, es.scene.box_yaw)
     d = jax.lax.fori_loop(0, k, lambda _, x: sim.plain_step(m, x), es.data)
     return es.replace(data=d)
 

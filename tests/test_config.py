@@ -95,6 +95,14 @@ def test_a_run_config_from_before_terrains_gets_none_drawn_and_todays_held_out_t
   assert cfg.evaluation.held_out_terrain == today.evaluation.held_out_terrain != ()
 
 
+def test_a_terrain_run_config_from_before_spirals_gets_their_default_ranges_and_keeps_its_own():
+  raw = load_config("uplift", ["scene.terrain.uplift.height=[0.1, 0.2]"]).to_dict()
+  del raw["scene"]["terrain"]["spiral_up"], raw["scene"]["terrain"]["spiral_down"]
+  cfg = from_dict(raw)
+  assert cfg.scene.terrain.spiral_up == load_config("spiral-up").scene.terrain.spiral_up
+  assert cfg.scene.terrain.uplift.height == (0.1, 0.2) and "spiral_up" not in raw["scene"]["terrain"]  # raw untouched
+
+
 def test_renamed_curriculum_variants_say_their_new_names():
   with pytest.raises(ConfigError, match="'original' is now 'original_code'"):
     load_config("asc-inc-cog", ["scene.variant=original"])
@@ -108,12 +116,29 @@ def test_hardest_scene_pins_every_parameter_at_its_hard_end():
     scene_config(load_config("nav"), "hardest")
 
 
+def test_nav_suites_evaluate_each_area_kind_alone():
+  import jax
+  from mjx_tracks.envs.task_env import make_scene
+  from train.evaluate import scene_config, suite_scenes
+  cfg = load_config("nav")
+  assert suite_scenes(cfg) == ["uniform", "nav/hallway", "nav/zigzag"]
+  assert suite_scenes(load_config("nav", ["scene.nav_kinds=[zigzag]"])) == ["uniform"]
+  for variant, kind in enumerate(("hallway", "zigzag")):
+    scene = make_scene(scene_config(cfg, f"nav/{kind}").scene)
+    s = jax.vmap(scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 16), 0.5)
+    assert (s.variant == variant).all()
+  with pytest.raises(ConfigError, match=r"draws navigation areas \['zigzag'\]"):
+    scene_config(load_config("nav", ["scene.nav_kinds=[zigzag]"]), "nav/hallway")
+  with pytest.raises(ConfigError, match=r"draws navigation areas \[\]"):
+    scene_config(load_config("asc-inc-cog"), "nav/hallway")
+
+
 def test_held_out_scenes_pin_their_staircase_and_bad_ones_are_named():
   from train.evaluate import scene_config, suite_scenes
   cfg = load_config("asc-inc-cog", ["evaluation.held_out=[{name: low, tread: 0.5, riser: 0.12, steps: 2}]"])
   s = scene_config(cfg, "held-out/low").scene
   assert (s.tread, s.riser, s.steps, s.sampler) == ((0.5, 0.5), (0.12, 0.12), (2, 2), "uniform")
-  assert suite_scenes(cfg) == ["hardest", "uniform", "held-out/low"] and suite_scenes(load_config("nav")) == ["uniform"]
+  assert suite_scenes(cfg) == ["hardest", "uniform", "held-out/low"]
   with pytest.raises(ConfigError, match="names \\['low'\\]"):
     scene_config(cfg, "held-out/high")
   with pytest.raises(ConfigError, match=r"evaluation.held_out\[0\].steps: must be in \[1, 15\]"):

@@ -22,7 +22,7 @@ N_TERRAIN_ENVS, TERRAIN_SEED = 16, 4  # the mixed terrain task's reset: every ki
 # sampler, reward kind, direction and terrain kind (the mixed task draws each), so every other task,
 # differing from one of them in those keys only (checked below), runs code they compile; a task
 # differing in a size as well (a box pool) is traced to check its shapes
-RUN_TASKS = ("asc-inc-cog", "des-inc-ang", "nav", "mixed-terrain", "asc-inc-cog-r2")
+RUN_TASKS = ("asc-inc-cog", "des-inc-ang", "nav", "mixed-terrain", "asc-inc-cog-r2", "spiral-up")
 EXERCISED_KEYS = {"task", "scene.sampler", "reward.kind", "scene.direction", "scene.terrains", "episode.max_steps"}
 SIZE_KEYS = {"scene.steps", "scene.nav_floor_obstacles"}
 

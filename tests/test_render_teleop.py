@@ -1,4 +1,4 @@
-"""Real depth image against ray casting; keyboard teleop key mapping."""
+"""Real depth image against ray casting; GIFs of rendered frames; keyboard teleop key mapping."""
 
 import mujoco
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 
 from mjx_tracks.robots import get_robot
 from mjx_tracks.sim.control import INCREMENT
-from mjx_tracks.tools.render import render_depth
+from mjx_tracks.tools.render import render_depth, render_frames, write_video
 from mjx_tracks.tools.teleop import apply_key
 
 
@@ -30,6 +30,23 @@ def test_depth_image_centre_matches_a_ray_along_the_camera_axis(jaguar_stairs):
                          1, -1, np.zeros(1, np.int32))
   centre = depth[239:241, 319:321].mean()
   assert oracle > 0 and centre == pytest.approx(oracle, abs=0.01)
+
+
+def test_a_gif_holds_every_rendered_frame_at_half_size_and_the_control_rate(jaguar_stairs, tmp_path):
+  from PIL import Image
+  sim = jaguar_stairs
+  n = len(sim.layout.scene_boxes)
+  pos, size, yaw = np.tile([-50.0, 0, -10], (n, 1)), np.full((n, 3), 0.1), np.zeros(n)
+  pos[0], size[0], yaw[0] = (1.5, 0, 0.2), (0.5, 1.0, 0.2), 0.6  # a yawed block ahead
+  mj = sim.c_model_with_boxes(pos, size, yaw)
+  qpos = np.tile(mj.qpos0, (3, 1))
+  qpos[:, 0] = [0.0, 0.1, 0.2]
+  frames = render_frames(mj, qpos, width=160, height=120)
+  write_video(str(tmp_path / "t.gif"), frames, fps=4.0)
+  with Image.open(tmp_path / "t.gif") as gif:
+    assert (gif.n_frames, gif.size, gif.info["duration"], gif.info["loop"]) == (3, (80, 60), 250, 0)
+    first = np.asarray(gif.convert("RGB"), float)
+  assert np.abs(first - frames[0][::2, ::2]).mean() < 8  # palette quantization only
 
 
 def test_keys_drive_speeds_and_clip_joint_targets():

@@ -4,7 +4,8 @@ Scenes: hardest (every staircase parameter at its hard end of the task's ranges:
 l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by default; for terrain
 tasks every parameter of each kind), uniform (the task's ranges, uniform), incremental (the task's
 sampler at --eps), train (the task's own sampler at --eps), held-out/NAME (a fixed staircase of the
-task's evaluation.held_out), hardest/KIND (a terrain task's kind KIND alone, at its hardest);
+task's evaluation.held_out), hardest/KIND (a terrain task's kind KIND alone, at its hardest),
+nav/KIND (a navigation task's area kind KIND alone: hallway or zigzag);
 --suite runs the evaluation suite (suite_scenes). Trials run in parallel, one episode
 each, deterministic policy: the exported RUN_DIR/policy, those exported at milestone budgets too
 (--milestones), or with --checkpoint [STEP] a training checkpoint (a killed run has no export yet).
@@ -32,6 +33,7 @@ SCENES = ("hardest", "uniform", "incremental", "train")
 
 HELD_OUT = "held-out/"  # scene name prefix of the fixed held-out staircases / terrains (evaluation.held_out[_terrain])
 HARDEST = "hardest/"  # scene name prefix of one terrain kind's hardest configuration (terrain tasks)
+NAV = "nav/"  # scene name prefix of one navigation area kind (nav tasks)
 
 
 def suite_scenes(cfg: TaskConfig) -> list[str]:
@@ -41,8 +43,8 @@ def suite_scenes(cfg: TaskConfig) -> list[str]:
   if s.kind == "terrain":
     return ["hardest", "uniform", *((HARDEST + k for k in s.terrains) if len(s.terrains) > 1 else ()),
             *(HELD_OUT + h.name for h in cfg.evaluation.held_out_terrain if h.kind in s.terrains)]
-  if s.kind != "stairs":
-    return ["uniform"]
+  if s.kind == "nav":
+    return ["uniform", *((NAV + k for k in s.nav_kinds) if len(s.nav_kinds) > 1 else ())]
   return ["hardest", "uniform", *(HELD_OUT + h.name for h in cfg.evaluation.held_out)]
 
 
@@ -98,8 +100,13 @@ def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
     return _held_out(cfg, scene)
   if scene == "hardest" or scene.startswith(HARDEST):
     return dataclasses.replace(cfg, scene=_hardest(s, scene))
+  if scene.startswith(NAV):
+    kind = scene[len(NAV):]
+    if s.kind != "nav" or kind not in s.nav_kinds:
+      raise ConfigError(f"scene {scene!r}: the task draws navigation areas {list(s.nav_kinds) if s.kind == 'nav' else []}")
+    return dataclasses.replace(cfg, scene=dataclasses.replace(s, nav_kinds=(kind,)))
   if scene not in SCENES:
-    raise ConfigError(f"unknown scene {scene!r}: one of {SCENES}, {HELD_OUT}NAME or {HARDEST}KIND")
+    raise ConfigError(f"unknown scene {scene!r}: one of {SCENES}, {HELD_OUT}NAME, {HARDEST}KIND or {NAV}KIND")
   if scene in ("uniform", "incremental"):
     s = dataclasses.replace(s, sampler=scene)
   return dataclasses.replace(cfg, scene=s)
@@ -164,7 +171,7 @@ def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, 
   def run(params):
     acc, qpos, scene0 = compiled(params, keys)
     # trial 0's scene in a C model, for rendering its recorded qpos
-    render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size) if record else None
+    render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size, scene0.box_yaw) if record else None
     return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
 
   return run
@@ -224,7 +231,8 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--seed", type=int, default=EVAL_SEED)
   p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>[@<budget>].json; one scene only)")
   p.add_argument("--db", help="experiment database (default: beside the run directory)")
-  p.add_argument("--video", help="MP4 of trial 0 (needs the video extra; one scene only)")
+  p.add_argument("--video", help="MP4 (needs the video extra) or, for a path ending .gif, GIF of trial 0 "
+                 "until its episode ends (one scene only)")
   p.add_argument("--checkpoint", nargs="?", const="latest", metavar="STEP",
                  help="evaluate a training checkpoint (default the latest) instead of RUN_DIR/policy, "
                       "e.g. of a killed run")
@@ -251,7 +259,8 @@ def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: Tas
     out = _write_report(args, meta, scene, budget, policy_step, per_trial)
     if args.video:
       from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
-      write_video(args.video, render_frames(render_model, qpos), fps=1 / cfg.control.period)
+      shown = qpos[:int(per_trial["length"][0]) + 1]  # the reset, then trial 0 until its episode ended
+      write_video(args.video, render_frames(render_model, shown), fps=1 / cfg.control.period)
     lines.append(_summary(meta["task"], scene, budget, args.trials, per_trial, out))
   return lines
 

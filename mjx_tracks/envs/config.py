@@ -7,8 +7,11 @@ type and each range, and fails with a message that names the dotted key.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
 import importlib.resources
+import itertools
 import pathlib
 import re
 import typing
@@ -121,10 +124,16 @@ def _validate_terrain(kinds: tuple[str, ...], ranges, key: str, terrain_task: bo
     require(bool(kinds) and all(k in TERRAIN_PARAMS for k in kinds), f"{key}.terrains",
             f"a terrain task needs a non-empty list of {list(TERRAIN_PARAMS)}, got {list(kinds)}")
     require(len(set(kinds)) == len(kinds), f"{key}.terrains", f"has duplicates: {list(kinds)}")
+    require(len({TERRAIN_PARAMS[k].corridor for k in kinds}) == 1, f"{key}.terrains",
+            f"mixes corridor kinds with spirals (which stand in the open, without the corridor's walls): {list(kinds)}")
   for kind, p in TERRAIN_PARAMS.items():
+    r = getattr(ranges, kind)
     for name, (lo, hi) in zip(p.names, p.limits):
-      r = getattr(getattr(ranges, kind), name)
-      require(lo <= r[0] <= r[1] <= hi, f"{key}.terrain.{kind}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(r)}")
+      v = getattr(r, name)
+      require(lo <= v[0] <= v[1] <= hi, f"{key}.terrain.{kind}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(v)}")
+    for corner in itertools.product(*(getattr(r, name) for name in p.names)):
+      problem = p.check(corner)
+      require(not problem, f"{key}.terrain.{kind}", f"at {list(corner)}: {problem}")
 
 
 SCENE_KINDS = ("stairs", "nav", "terrain")
@@ -226,6 +235,8 @@ class HeldOutTerrain:
     require(len(self.values) == len(p.names), f"{key}.values", f"{self.kind} takes {list(p.names)}, got {list(self.values)}")
     for name, v, (lo, hi) in zip(p.names, self.values, p.limits):
       require(lo <= v <= hi, f"{key}.values", f"{name} must be in [{lo}, {hi}], got {v}")
+    problem = p.check(tuple(self.values))
+    require(not problem, f"{key}.values", problem)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -382,16 +393,19 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("scene", "nav_floor_obstacles"): 0,  # before floor obstacles: none
               ("scene", "nav_floor_height"): FROM_DEFAULTS,
               ("scene", "terrain"): FROM_DEFAULTS,
+              ("scene", "terrain", "spiral_up"): FROM_DEFAULTS, ("scene", "terrain", "spiral_down"): FROM_DEFAULTS,
               ("evaluation", "held_out_terrain"): FROM_DEFAULTS}  # evaluation only: old runs get today's
 
 
 def _with_added_keys(raw: dict) -> dict:
   """A recorded config (run.json) from before a key existed, with that key's old behaviour."""
-  raw = dict(raw)
-  for (section, key), value in ADDED_KEYS.items():
-    if isinstance(raw.get(section, {}), dict) and key not in raw.get(section, {}):
-      value = _read_yaml(DEFAULTS)[section][key] if value == FROM_DEFAULTS else value
-      raw[section] = {**raw.get(section, {}), key: value}
+  raw = copy.deepcopy(raw)
+  for path, value in ADDED_KEYS.items():
+    node = raw
+    for part in path[:-1]:
+      node = node.setdefault(part, {}) if isinstance(node, dict) else None
+    if isinstance(node, dict) and path[-1] not in node:
+      node[path[-1]] = functools.reduce(dict.get, path, _read_yaml(DEFAULTS)) if value == FROM_DEFAULTS else value
   return raw
 
 

@@ -64,7 +64,7 @@ class _Stack:
 def _frame(core, state, index: int, width: int, height: int) -> np.ndarray:
   from mjx_tracks.tools.render import render_frames  # noqa: PLC0415
   es = jax.tree_util.tree_map(lambda x: np.asarray(x[index]), state.pipeline_state)
-  mj = core.sim.c_model_with_boxes(es.scene.box_pos, es.scene.box_size)
+  mj = core.sim.c_model_with_boxes(es.scene.box_pos, es.scene.box_size, es.scene.box_yaw)
   return render_frames(mj, es.data.qpos[None], width, height)[0]
 
 

@@ -109,7 +109,7 @@ class TrackedRobotEnv(Env):
 
   def step(self, state: State, action: jax.Array) -> State:
     es: EnvState = state.pipeline_state
-    m = self.sim.with_boxes(es.scene.box_pos, es.scene.box_size)
+    m = self.sim.with_boxes(es.scene.box_pos, es.scene.box_size, es.scene.box_yaw)
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
     data = self.sim.advance(m, es.data, self.controller.belt_speeds(v, w), targets, self.substeps)
     data = self._sense(m, data)
@@ -143,7 +143,7 @@ class TrackedRobotEnv(Env):
     """Draws a scene at difficulty eps and places the robot at its spawn."""
     k_scene, k_obs, k_next = jax.random.split(rng, 3)
     scene = self.scene.sample(k_scene, eps)
-    m = self.sim.with_boxes(scene.box_pos, scene.box_size)
+    m = self.sim.with_boxes(scene.box_pos, scene.box_size, scene.box_yaw)
     nj = self.sim.layout.n_joints
     data = self._sense(m, self.sim.init_data(scene.spawn_pos, scene.spawn_yaw, jnp.zeros(nj)))
     d0 = goal_distance(data.xpos[self.sim.layout.chassis_body], scene.goal, scene.goal_halfwidth,

@@ -26,6 +26,12 @@ def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax
                           lambda m, d, slip: aref_shift(m, d, tm, slip))
 
 
+def yaw_quat(yaw: jax.Array) -> jax.Array:
+  """Unit quaternions (w, x, y, z) of rotations by yaw (rad) about z; shape (..., 4)."""
+  z = jnp.zeros_like(yaw)
+  return jnp.stack([jnp.cos(yaw / 2), z, z, jnp.sin(yaw / 2)], axis=-1)
+
+
 @dataclasses.dataclass(frozen=True)
 class Simulator:
   """A compiled robot + world; pure step functions, nothing changes after construction."""
@@ -47,28 +53,33 @@ class Simulator:
     model = mjx.put_model(mj_model, impl="jax", device=jax.local_devices()[0])
     return Simulator(robot, physics, mj_model, model, layout, tracks)
 
-  def with_boxes(self, box_pos: jax.Array, box_size: jax.Array) -> mjx.Model:
-    """The model with this environment's scene boxes (centres, half-sizes in m) swapped in."""
+  def with_boxes(self, box_pos: jax.Array, box_size: jax.Array, box_yaw: jax.Array | None = None) -> mjx.Model:
+    """The model with this environment's scene boxes (centres, half-sizes in m, yaws in rad; None:
+    axis-aligned as compiled) swapped in."""
     ids = jnp.asarray(self.layout.scene_boxes)
     m = self.model
-    return m.replace(
+    m = m.replace(
         geom_pos=m.geom_pos.at[ids].set(box_pos),
         geom_size=m.geom_size.at[ids].set(box_size),
         geom_rbound=m.geom_rbound.at[ids].set(jnp.linalg.norm(box_size, axis=-1)),
     )
+    return m if box_yaw is None else m.replace(geom_quat=m.geom_quat.at[ids].set(yaw_quat(box_yaw)))
 
-  def c_model_with_boxes(self, box_pos, box_size) -> mujoco.MjModel:
+  def c_model_with_boxes(self, box_pos, box_size, box_yaw=None) -> mujoco.MjModel:
     """A copy of the MuJoCo C model with one environment's scene boxes (for rendering, oracles)."""
     mj = copy.copy(self.mj_model)
     ids = self.layout.scene_boxes
     mj.geom_pos[ids], mj.geom_size[ids] = np.asarray(box_pos), np.asarray(box_size)
+    if box_yaw is not None:
+      mj.geom_quat[ids] = np.asarray(yaw_quat(jnp.asarray(box_yaw)))
+      mj.geom_sameframe[ids] = mujoco.mjtSameFrame.mjSAMEFRAME_NONE  # else the compiled "same rotation as the body" wins
     return mj
 
   def init_data(self, pos: jax.Array, yaw: jax.Array, joint_angles: jax.Array | None = None) -> mjx.Data:
     """Data with the chassis resting at ground point pos (m) with heading yaw (rad)."""
     d = mjx.make_data(self.model, impl="jax", device=jax.local_devices()[0])
     qpos = d.qpos.at[0:3].set(pos + jnp.array([0.0, 0.0, self.robot.spawn_height + SPAWN_CLEARANCE]))
-    qpos = qpos.at[3:7].set(jnp.stack([jnp.cos(yaw / 2), 0.0, 0.0, jnp.sin(yaw / 2)]))
+    qpos = qpos.at[3:7].set(yaw_quat(jnp.asarray(yaw, jnp.float32)))
     if joint_angles is not None:
       qpos = qpos.at[self.layout.joint_qpos].set(joint_angles)
       d = d.replace(ctrl=joint_angles)

@@ -24,12 +24,23 @@ def render_frames(mj_model, qpos_seq: np.ndarray, width: int = 480, height: int 
 
 
 def write_video(path: str, frames: list[np.ndarray], fps: float) -> None:
-  """Writes frames to an MP4 (needs the `video` extra: imageio + imageio-ffmpeg)."""
+  """Writes frames to a GIF (a path ending .gif; at half size, Pillow) or an MP4 (needs the `video`
+  extra: imageio + imageio-ffmpeg)."""
+  if path.lower().endswith(".gif"):
+    write_gif(path, frames, fps)
+    return
   try:
     import imageio.v2 as imageio  # noqa: PLC0415
   except ImportError as e:
     raise SystemExit("error: --video needs the video extra: pip install 'mjx-tracks[video]'") from e
   imageio.mimwrite(path, frames, fps=fps, macro_block_size=1)
+
+
+def write_gif(path: str, frames: list[np.ndarray], fps: float) -> None:
+  """Writes frames, halved in each dimension, to a looping GIF (Pillow, a matplotlib dependency)."""
+  from PIL import Image  # noqa: PLC0415
+  images = [Image.fromarray(np.ascontiguousarray(f[::2, ::2])) for f in frames]
+  images[0].save(path, save_all=True, append_images=images[1:], duration=round(1000 / fps), loop=0, optimize=True)
 
 
 def render_depth(mj_model, qpos: np.ndarray, camera: str = "depth_camera") -> np.ndarray:

@@ -1,0 +1,75 @@
+"""Renders one GIF per task of a study: trial 0 of its first finished run's policy on the task's
+hardest configuration (uniform scenes for navigation), until the episode ends, with the trial's
+outcome in OUT/index.json. Runs the tasks in parallel processes (EGL on a GPU host).
+
+cd scripts && python render_gifs.py ../results/studies/terrain OUT [--tasks T ...] [--jobs 8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import datetime
+import json
+import os
+import subprocess
+import sys
+
+from mjx_tracks.envs.config import from_dict
+from train.study.executor import cell_folder_of, read_cells
+
+
+def first_runs(study_folder: str, tasks: list[str] | None) -> dict[str, str]:
+  """task -> the folder of its first finished run (by cell id) that has an exported policy."""
+  out: dict[str, str] = {}
+  for cid, cell in sorted(read_cells(study_folder).items()):
+    run = cell_folder_of(study_folder, cid)
+    if cell["status"] != "done" or not os.path.isdir(os.path.join(run, "policy")):
+      continue
+    task = json.load(open(os.path.join(run, "run.json")))["config"]["task"]
+    if (not tasks or task in tasks) and task not in out:
+      out[task] = run
+  return out
+
+
+def gif_scene(run: str) -> str:
+  """The scene a task's GIF shows: its hardest configuration, or uniform scenes (navigation)."""
+  cfg = from_dict(json.load(open(os.path.join(run, "run.json")))["config"])
+  return "hardest" if cfg.scene.has_hardest else "uniform"
+
+
+def render(task: str, run: str, out: str) -> dict:
+  """One GIF (OUT/<task>.gif) through train.evaluate --video; the trial's figures beside it."""
+  scene, report = gif_scene(run), os.path.join(out, f"{task}.json")
+  cmd = [sys.executable, "-m", "train.evaluate", run, "--scene", scene, "--trials", "1", "--out", report,
+         "--db", os.path.join(out, "gifs.sqlite"), "--video", os.path.join(out, f"{task}.gif")]
+  env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}  # beside training runs on the same GPUs
+  res = subprocess.run(cmd, capture_output=True, text=True, env=env)
+  if res.returncode != 0:
+    return {"task": task, "error": res.stderr[-2000:]}
+  m = json.load(open(report))["metrics"]
+  return {"task": task, "run": os.path.basename(run), "scene": scene, "success": m["success"]["mean"],
+          "progress": m["progress"]["mean"], "tipped_over": m["tipped_over"]["mean"], "steps": m["length"]["mean"]}
+
+
+def main(argv: list[str] | None = None) -> int:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("study_folder")
+  p.add_argument("out")
+  p.add_argument("--tasks", nargs="*")
+  p.add_argument("--jobs", type=int, default=8)
+  args = p.parse_args(argv)
+  os.makedirs(args.out, exist_ok=True)
+  runs = first_runs(args.study_folder, args.tasks)
+  with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
+    done = list(pool.map(lambda t: render(t, runs[t], args.out), sorted(runs)))
+  for d in done:
+    print(json.dumps(d)[:300], flush=True)
+  index = {"command": "python render_gifs.py " + " ".join(sys.argv[1:] if argv is None else argv),
+           "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), "gifs": done}
+  json.dump(index, open(os.path.join(args.out, "index.json"), "w"), indent=1)
+  return 1 if any("error" in d for d in done) or not done else 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())
