@@ -31,8 +31,9 @@ def main(argv: list[str] | None = None) -> int:
   db = os.path.join(args.study_folder, STUDY_DB)
   for cid, cell in read_cells(args.study_folder).items():
     run = cell_folder_of(args.study_folder, cid)
-    task = cid.split("/")[1]
-    if cell["status"] != "done" or not os.path.isdir(os.path.join(run, "policy")) or (args.tasks and task not in args.tasks):
+    if cell["status"] != "done" or not os.path.isdir(os.path.join(run, "policy")):
+      continue
+    if args.tasks and json.load(open(os.path.join(run, "run.json")))["config"]["task"] not in args.tasks:
       continue
     for scene in missing_scenes(run):
       print(f"[{cid}] {scene}", flush=True)

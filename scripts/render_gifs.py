@@ -1,8 +1,9 @@
-"""Renders one GIF per task of a study: trial 0 of its first finished run's policy on the task's
+"""Renders one GIF per task of a study (or of a folder of run folders): trial 0 of its first finished
+run's policy on the task's
 hardest configuration (uniform scenes for navigation), until the episode ends, with the trial's
 outcome in OUT/index.json. Runs the tasks in parallel processes (EGL on a GPU host).
 
-cd scripts && python render_gifs.py ../results/studies/terrain OUT [--tasks T ...] [--jobs 8]
+cd scripts && python render_gifs.py STUDY_OR_RUNS_FOLDER OUT [--tasks T ...] [--jobs 8]
 """
 
 from __future__ import annotations
@@ -19,12 +20,18 @@ from mjx_tracks.envs.config import from_dict
 from train.study.executor import cell_folder_of, read_cells
 
 
-def first_runs(study_folder: str, tasks: list[str] | None) -> dict[str, str]:
-  """task -> the folder of its first finished run (by cell id) that has an exported policy."""
+def _finished(source: str) -> list[str]:
+  """Run folders of a study's finished cells (by cell id), or the run folders inside a folder."""
+  if not os.path.exists(os.path.join(source, "state.json")):
+    return sorted(os.path.join(source, d) for d in os.listdir(source) if os.path.exists(os.path.join(source, d, "run.json")))
+  return [cell_folder_of(source, cid) for cid, cell in sorted(read_cells(source).items()) if cell["status"] == "done"]
+
+
+def first_runs(source: str, tasks: list[str] | None) -> dict[str, str]:
+  """task -> the folder of its first finished run that has an exported policy."""
   out: dict[str, str] = {}
-  for cid, cell in sorted(read_cells(study_folder).items()):
-    run = cell_folder_of(study_folder, cid)
-    if cell["status"] != "done" or not os.path.isdir(os.path.join(run, "policy")):
+  for run in _finished(source):
+    if not os.path.isdir(os.path.join(run, "policy")):
       continue
     task = json.load(open(os.path.join(run, "run.json")))["config"]["task"]
     if (not tasks or task in tasks) and task not in out:
@@ -54,13 +61,13 @@ def render(task: str, run: str, out: str) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
   p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  p.add_argument("study_folder")
+  p.add_argument("source", help="a study folder, or a folder of run folders")
   p.add_argument("out")
   p.add_argument("--tasks", nargs="*")
   p.add_argument("--jobs", type=int, default=8)
   args = p.parse_args(argv)
   os.makedirs(args.out, exist_ok=True)
-  runs = first_runs(args.study_folder, args.tasks)
+  runs = first_runs(args.source, args.tasks)
   with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
     done = list(pool.map(lambda t: render(t, runs[t], args.out), sorted(runs)))
   for d in done:

@@ -95,6 +95,25 @@ def test_a_study_continued_from_a_copy_of_dest_brings_dests_attempts_once(finish
   assert rows == list(range(2, len(own) + 2))
 
 
+def test_a_study_grown_in_src_gives_dest_its_spec_and_its_new_runs(finished, tmp_path):
+  import yaml
+  dest = str(tmp_path / "dest")
+  shutil.copytree(finished, dest)
+  new = [cid for cid in read_cells(finished) if cid.endswith("/s1")]  # seed 1 was added to the study in SRC
+  for cid in new:
+    _forget(dest, cid, stopped=False)
+  state = json.load(open(os.path.join(dest, "state.json")))
+  state["cells"] = {cid: c for cid, c in state["cells"].items() if cid not in new}
+  json.dump(state, open(os.path.join(dest, "state.json"), "w"))
+  spec = yaml.safe_load(open(os.path.join(dest, "study.yaml")))
+  yaml.safe_dump({**spec, "seeds": [0]}, open(os.path.join(dest, "study.yaml"), "w"), sort_keys=False)
+  assert merge(dest, finished) == sorted(new)
+  assert yaml.safe_load(open(os.path.join(dest, "study.yaml")))["seeds"] == [0, 1]
+  assert read_cells(dest) == read_cells(finished)
+  report = lambda folder: [line for line in open(write_report(folder, "cmd")) if line.startswith("|")]  # noqa: E731
+  assert report(dest) == report(finished)
+
+
 def test_a_folder_of_another_study_is_refused(finished, tmp_path, capsys):
   other = str(tmp_path / "other")
   shutil.copytree(finished, other)

@@ -1,7 +1,7 @@
-"""The study report of terrain tasks: per-kind hardest columns, and the mixed-terrain policy on each
+"""The study report of terrain tasks: per-kind hardest rows, and the mixed-terrain policy on each
 kind's hardest configuration beside the specialists (IQM over seeds, from made-up trials)."""
 
-from train.study.report import final_table, generalization_table, report_text
+from train.study.report import final_table, generalization_table, report_text, suite_table
 from train.study.results import RunResult, StudyResults
 from train.study.spec import cells, study_from_dict
 
@@ -31,8 +31,11 @@ def test_the_mixed_policy_sits_beside_each_kinds_specialist():
   assert sum(r.endswith("| - |") for r in rows) == 6
 
 
-def test_per_kind_hardest_columns_and_no_figure_9_without_the_papers_tasks():
-  head = final_table(_results())[0]
-  assert "success hardest/uplift" in head and "success hardest/waves" in head
+def test_per_kind_hardest_rows_runs_counted_on_any_scene_and_no_figure_9_without_the_papers_tasks():
+  rows = suite_table(_results())
+  assert rows[2:] == ["| ppo | mixed-terrain | 100 | hardest/uplift | 3 | 1.00 [1.00, 1.00] | 1.00 [1.00, 1.00] |",
+                      "| ppo | mixed-terrain | 100 | hardest/waves | 3 | 0.00 [0.00, 0.00] | 0.00 [0.00, 0.00] |"]
+  mixed = next(r for r in final_table(_results()) if "| mixed-terrain |" in r)
+  assert mixed.startswith("| ppo | mixed-terrain | 100 | 3 | - | - | - |")  # no 'hardest' of its own here
   text = report_text(_results(), [], "cmd")
   assert "Generalization" in text and "Figure 9" not in text

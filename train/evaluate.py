@@ -258,9 +258,10 @@ def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: Tas
     per_trial, qpos, render_model = run(params)
     out = _write_report(args, meta, scene, budget, policy_step, per_trial)
     if args.video:
-      from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
+      from mjx_tracks.tools.render import camera_for, render_frames, write_video  # noqa: PLC0415
       shown = qpos[:int(per_trial["length"][0]) + 1]  # the reset, then trial 0 until its episode ended
-      write_video(args.video, render_frames(render_model, shown), fps=1 / cfg.control.period)
+      frames = render_frames(render_model, shown, **camera_for(cfg.scene.kind))
+      write_video(args.video, frames, fps=1 / cfg.control.period)
     lines.append(_summary(meta["task"], scene, budget, args.trials, per_trial, out))
   return lines
 

@@ -6,12 +6,21 @@ import mujoco
 import numpy as np
 
 
+FOLLOW = {"distance": 3.0, "elevation": -20.0}  # m, deg: behind and beside the robot (stairs, terrains)
+OVERHEAD = {"distance": 9.0, "elevation": -65.0}  # m, deg: high above it, over the walls (navigation areas)
+
+
+def camera_for(scene_kind: str) -> dict:
+  """The following camera's distance and elevation for a scene kind (configs: scene.kind)."""
+  return OVERHEAD if scene_kind == "nav" else FOLLOW
+
+
 def render_frames(mj_model, qpos_seq: np.ndarray, width: int = 480, height: int = 360,
-                  distance: float = 3.0) -> list[np.ndarray]:
-  """One RGB frame per qpos row, from a camera that follows the chassis."""
+                  distance: float = FOLLOW["distance"], elevation: float = FOLLOW["elevation"]) -> list[np.ndarray]:
+  """One RGB frame per qpos row, from a camera that follows the chassis (distance m, elevation deg)."""
   data = mujoco.MjData(mj_model)
   cam = mujoco.MjvCamera()
-  cam.distance, cam.azimuth, cam.elevation = distance, 120.0, -20.0
+  cam.distance, cam.azimuth, cam.elevation = distance, 120.0, elevation
   frames = []
   with mujoco.Renderer(mj_model, height, width) as renderer:
     for q in qpos_seq:

@@ -2,7 +2,8 @@
 study (its runs made on other machines, or the study continued elsewhere) into DEST: each run done
 in SRC and not in DEST (or marked done there without its run folder: a folder that came back without
 its ignored files) brings its run folder, its database rows, its attempts (after DEST's own, each once when SRC
-continued from a copy of DEST)."""
+continued from a copy of DEST). A study that grew in SRC (its study.yaml lists every run of DEST's and
+more: tasks or seeds added) gives DEST its study.yaml, and its new runs come too."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import sys
 from train.db import ExperimentDB
 from train.study.executor import STATE, STUDY_DB, StudyState, cell_folder_of, read_cells, run_id_in
 from train.study.results import SPEC_FILE
-from train.study.spec import load_study
+from train.study.spec import cells, load_study
 
 
 def _study_name(folder: str) -> str:
@@ -43,13 +44,23 @@ def _merge_cell(dest: str, src: str, name: str, cid: str, dest_cells: dict, src_
   dest_cells[cid] = {"status": "done", "attempts": base + src_cells[cid]["attempts"]}
 
 
+def _adopt_a_grown_spec(dest: str, src: str) -> None:
+  """DEST takes SRC's study.yaml when that lists every run of DEST's and more."""
+  ids = lambda folder: {c.id for c in cells(load_study(os.path.join(folder, SPEC_FILE)))}  # noqa: E731
+  if ids(src) > ids(dest):
+    shutil.copyfile(os.path.join(src, SPEC_FILE), os.path.join(dest, SPEC_FILE))
+
+
 def merge(dest: str, src: str) -> list[str]:
   """Merges SRC's done runs that DEST lists and has not done (or has no run folder of); returns
   their cell ids."""
   name = _study_name(dest)
   if _study_name(src) != name:
     raise ValueError(f"{src} holds study {_study_name(src)!r}, {dest} holds {name!r}")
+  _adopt_a_grown_spec(dest, src)
   dest_cells, src_cells = read_cells(dest), read_cells(src)
+  for cell in cells(load_study(os.path.join(dest, SPEC_FILE))):
+    dest_cells.setdefault(cell.id, {"status": "queued", "attempts": []})
   ids = [cid for cid, c in src_cells.items()
          if c["status"] == "done" and cid in dest_cells
          and (dest_cells[cid]["status"] != "done" or run_id_in(cell_folder_of(dest, cid)) is None)]

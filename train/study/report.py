@@ -10,7 +10,7 @@ import os
 import numpy as np
 
 from mjx_tracks.envs.config import load_config
-from train.evaluate import HARDEST, HELD_OUT
+from train.evaluate import HARDEST, HELD_OUT, NAV
 from train.study.executor import overview
 from train.study.figures import write_figures
 from train.study.paper import FIGURE9
@@ -31,22 +31,40 @@ def _mean_sd(x: np.ndarray, digits: int = 3) -> str:
   return "-" if not len(x) else f"{x.mean():.{digits}f} +- {x.std():.{digits}f}"
 
 
+def _runs(results: StudyResults, group: str, task: str, budget: int) -> int:
+  """Finished runs (seeds) of a row: those with trials on any scene."""
+  return max((len(results.final(group, task, budget, s, "success")) for s in results.scenes()), default=0)
+
+
 def final_table(results: StudyResults) -> list[str]:
-  """One row per (group, task, budget): IQM [95 % CI] of success / progress per scene, success on
-  each held-out staircase and each terrain kind's hardest, and mean +- sd over seeds of pitch rate
-  and tip-overs on the hardest configuration."""
-  held = [s for s in results.scenes() if s.startswith((HELD_OUT, HARDEST))]
-  cols = [f"{m} {s}" for m, s in FINAL_COLUMNS] + [f"success {s}" for s in held]
+  """One row per (group, task, budget): IQM [95 % CI] of success / progress on the hardest
+  configuration and uniform scenes, and mean +- sd over seeds of pitch rate and tip-overs on the
+  hardest configuration."""
+  cols = [f"{m} {s}" for m, s in FINAL_COLUMNS]
   lines = [f"| group | task | budget | runs | {' | '.join(cols)} | pitch rate hardest (rad/s) | tip-overs hardest |",
            "|---" * (len(cols) + 6) + "|"]
   for group, task, budget in results.groups():
     fig = lambda m, s: results.final(group, task, budget, s, m)  # noqa: E731
-    est = iqm_intervals({f"{m} {s}": fig(m, s) for m, s in [*FINAL_COLUMNS, *(("success", h) for h in held)]})
-    n = len(fig("success", results.scenes()[0])) if results.scenes() else 0
-    cells = [_ci(est.get(c)) for c in cols]
-    lines.append(f"| {group} | {task} | {budget:,} | {n} | {' | '.join(cells)} | "
+    est = iqm_intervals({f"{m} {s}": fig(m, s) for m, s in FINAL_COLUMNS})
+    lines.append(f"| {group} | {task} | {budget:,} | {_runs(results, group, task, budget)} | "
+                 f"{' | '.join(_ci(est.get(c)) for c in cols)} | "
                  f"{_mean_sd(fig('pitch_rate', 'hardest'))} | {_mean_sd(fig('tipped_over', 'hardest'), 2)} |")
   return lines
+
+
+def suite_table(results: StudyResults) -> list[str]:
+  """One row per (group, task, budget, scene) of the suite's other scenes (held-out staircases and
+  terrains, each terrain kind's hardest, each navigation area): runs, success and progress IQM [95 % CI]."""
+  lines = ["| group | task | budget | scene | runs | success | progress |", "|---" * 7 + "|"]
+  others = [s for s in results.scenes() if s not in ("hardest", "uniform")]
+  for group, task, budget in results.groups():
+    for scene in others:
+      fig = {m: results.final(group, task, budget, scene, m) for m in ("success", "progress")}
+      if len(fig["success"]):
+        est = iqm_intervals(fig)
+        lines.append(f"| {group} | {task} | {budget:,} | {scene} | {len(fig['success'])} | "
+                     f"{_ci(est.get('success'))} | {_ci(est.get('progress'))} |")
+  return lines if len(lines) > 2 else []
 
 
 def improvement_table(results: StudyResults) -> list[str]:
@@ -127,6 +145,11 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
          f"{LEVEL:.0%} confidence interval ({REPS:,} resamples, rliable). Pitch rate and tip-overs: "
          "mean +- sd over seeds.",
          "", *final_table(results), ""]
+  suite = suite_table(results)
+  if suite:
+    out += ["## The rest of the evaluation suite", "",
+            f"Held-out configurations (`{HELD_OUT}NAME`), each terrain kind's hardest (`{HARDEST}KIND`) and "
+            f"each navigation area (`{NAV}KIND`): IQM over seeds [{LEVEL:.0%} CI].", "", *suite, ""]
   if spec.compare:
     rows = improvement_table(results)
     out += ["## Probability of improvement", "",
