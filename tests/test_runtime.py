@@ -118,18 +118,26 @@ def _runs_match(a: str, b: str, step: int, name: str) -> None:
 EVERY_CONTACT = ["--set", "physics.contact_slots=-1", "--set", "physics.box_pairs=-1"]
 
 
-def _tiny_run(out: str, database: str, devices: int) -> None:
-  proc = start_training([*TRAIN_TINY, *EVERY_CONTACT, "--steps", "512", "--out", out, "--db", database],
+def _start_tiny_run(out: str, database: str, devices: int):
+  return start_training([*TRAIN_TINY, *EVERY_CONTACT, "--steps", "512", "--out", out, "--db", database],
                         out + ".log", {"XLA_FLAGS": f"--xla_force_host_platform_device_count={devices}"})
+
+
+def _check_tiny_run(out: str, devices: int, proc) -> None:
   assert proc.wait(600) == 0, open(out + ".log").read()[-2000:]
   assert f"on {devices} x cpu" in open(out + ".log").read()
 
 
+def _tiny_run(out: str, database: str, devices: int) -> None:
+  _check_tiny_run(out, devices, _start_tiny_run(out, database, devices))
+
+
 def test_two_cpu_devices_train_like_one(tmp_path):
-  """The same run on 1 CPU device and on a mesh of 2."""
+  """The same run on 1 CPU device and on a mesh of 2 (side by side: each compiles on its own core)."""
   database = str(tmp_path / "db.sqlite")
-  for devices in (1, 2):
-    _tiny_run(str(tmp_path / f"d{devices}"), database, devices)
+  runs = [(str(tmp_path / f"d{n}"), n, _start_tiny_run(str(tmp_path / f"d{n}"), database, n)) for n in (1, 2)]
+  for out, devices, proc in runs:
+    _check_tiny_run(out, devices, proc)
   _runs_match(str(tmp_path / "d1"), str(tmp_path / "d2"), 512, "2 devices")
 
 
