@@ -27,6 +27,7 @@ def centre_line(radius, phi) -> jax.Array:
 
 
 def _heading(phi) -> jax.Array:
+  """The unit vector (x, y) of heading phi (rad)."""
   return jnp.stack([jnp.cos(phi), jnp.sin(phi)], axis=-1)
 
 
