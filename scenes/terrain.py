@@ -195,9 +195,6 @@ class TerrainScene:
       raise ValueError(f"terrain kinds must be a non-empty list of {sorted(TERRAIN_PARAMS)}, got {list(self.kinds)}")
     if len({TERRAIN_PARAMS[k].corridor for k in self.kinds}) > 1:
       raise ValueError(f"terrain kinds {list(self.kinds)} mix corridor kinds with spirals (which stand in the open)")
-    if not self.corridor and (self.random_spawn or self.random_goal):
-      raise ValueError("spiral terrains place their spawn and goal on the stairs' centre line: "
-                       "random_spawn and random_goal are not supported")
 
   @property
   def corridor(self) -> bool:

@@ -2,8 +2,6 @@
 coordinates (downward rays over every tread's sector hit its height; beside the stairs, the floor),
 their spawns and goals, their open world, hard ends and settings."""
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 import mujoco
@@ -103,6 +101,6 @@ def test_bad_spiral_settings_name_their_key():
     load_config("spiral-down", ["scene.terrain.spiral_down.angle=[0.2, 0.25]", "scene.terrain.spiral_down.steps=[3, 15]"])
   with pytest.raises(ConfigError, match=r"evaluation.held_out_terrain\[0\].values: \(steps - 1\)"):
     load_config("spiral-up", ["evaluation.held_out_terrain=[{name: a, kind: spiral_up, values: [3, 0.5, 0.1, 9]}]"])
-  cfg = load_config("spiral-up")
-  with pytest.raises(ValueError, match="random_spawn and random_goal are not supported"):
-    make_scene(dataclasses.replace(cfg.scene, random_spawn=True))
+  for key in ("random_spawn", "random_goal"):
+    with pytest.raises(ConfigError, match=rf"scene.{key}: not supported by \['spiral_up'\]"):
+      load_config("spiral-up", [f"scene.{key}=true"])

@@ -168,6 +168,11 @@ class SceneConfig:
     from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
     require(self.kind in SCENE_KINDS, f"{key}.kind", f"must be one of {SCENE_KINDS}, got {self.kind!r}")
     _validate_terrain(self.terrains, self.terrain, key, self.kind == "terrain")
+    open_kinds = [k for k in self.terrains if not TERRAIN_PARAMS[k].corridor] if self.kind == "terrain" else []
+    require(not (open_kinds and self.random_spawn), f"{key}.random_spawn",
+            f"not supported by {open_kinds}: spawns and goals lie on the stairs' centre line")
+    require(not (open_kinds and self.random_goal), f"{key}.random_goal",
+            f"not supported by {open_kinds}: spawns and goals lie on the stairs' centre line")
     lo, hi = self.nav_floor_height
     require(0.01 <= lo <= hi <= 0.5, f"{key}.nav_floor_height", f"needs 0.01 <= min <= max <= 0.5, got {[lo, hi]}")
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
