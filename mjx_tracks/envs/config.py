@@ -405,12 +405,13 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
 def _with_added_keys(raw: dict) -> dict:
   """A recorded config (run.json) from before a key existed, with that key's old behaviour."""
   raw = copy.deepcopy(raw)
+  defaults = functools.cache(lambda: _read_yaml(DEFAULTS))  # read once, if a key needs it
   for path, value in ADDED_KEYS.items():
     node = raw
     for part in path[:-1]:
       node = node.setdefault(part, {}) if isinstance(node, dict) else None
     if isinstance(node, dict) and path[-1] not in node:
-      node[path[-1]] = functools.reduce(dict.get, path, _read_yaml(DEFAULTS)) if value == FROM_DEFAULTS else value
+      node[path[-1]] = functools.reduce(dict.get, path, defaults()) if value == FROM_DEFAULTS else value
   return raw
 
 
