@@ -117,10 +117,11 @@ EVAL_SEED = 1  # their reset keys: jax.random.split(PRNGKey(EVAL_SEED), trials)
 EVAL_EPS = 1.0  # the difficulty handed to reset (pinned scenes such as hardest ignore it)
 
 
-def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float):
+def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=lambda s: s.obs):
   """(core, rollout): the task env and a pure rollout(params, keys) -> (sums, qpos of trial 0 per
   step, trial 0's scene), one episode per trial from `core.reset_at(key, eps)` with actions
-  `make_act(params)(obs)`; sums holds each trial's METRICS sums, length and final chassis position."""
+  `make_act(params)(observe(state))` (a policy sees the observation; a scripted controller may see
+  the whole state); sums holds each trial's METRICS sums, length and final chassis position."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
@@ -135,7 +136,7 @@ def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float):
 
     def body(carry, _):
       s, acc, active = carry
-      s = jax.vmap(core.step)(s, act(s.obs))
+      s = jax.vmap(core.step)(s, act(observe(s)))
       a = active.astype(jnp.float32)
       acc = {**{k: acc[k] + a * s.metrics[k] for k in METRICS}, "length": acc["length"] + a,
              "final_pos": jnp.where(active[:, None], s.pipeline_state.data.qpos[:, :3], acc["final_pos"])}
@@ -161,11 +162,12 @@ def per_trial_figures(acc) -> dict:
   return {**episode_figures(acc, acc["length"]), "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
 
 
-def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, record: bool = False):
+def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, record: bool = False,
+                 observe=lambda s: s.obs):
   """run(params) -> (per-trial figures with each trial's final chassis position, qpos of trial 0 at
   every step and a C model of its scene if record): compiled once, for every policy of one network."""
   import jax  # noqa: PLC0415
-  core, rollout = trial_rollout(cfg, make_act, trials, eps)
+  core, rollout = trial_rollout(cfg, make_act, trials, eps, observe)
   compiled, keys = jax.jit(rollout), trial_keys(trials, seed)
 
   def run(params):
