@@ -1,7 +1,7 @@
 """Renders one GIF per task of a study (or of a folder of run folders): trial 0 of its first finished
-run's policy on the task's
-hardest configuration (uniform scenes for navigation), until the episode ends, with the trial's
-outcome in OUT/index.json. Runs the tasks in parallel processes (EGL on a GPU host).
+run's policy on the task's hardest configuration (uniform scenes for navigation), until the episode
+ends, with the trial's outcome in OUT/index.json. Runs the tasks in parallel processes (EGL on a GPU
+host).
 
 cd scripts && python render_gifs.py STUDY_OR_RUNS_FOLDER OUT [--tasks T ...] [--jobs 8]
 """
