@@ -105,7 +105,7 @@ def test_time_limit_truncates_and_does_not_terminate():
 
 
 def test_finished_episodes_restart_on_a_new_scene():
-  core, _, reset, step = _compiled("asc-uni-cog")
+  core, _, reset, step = _compiled("nav")  # a run task (compiled once) whose uniform sampler redraws at any eps
   s = reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
   before = np.asarray(s.pipeline_state.scene.xi)
   s = _upside_down(s)
@@ -113,10 +113,11 @@ def test_finished_episodes_restart_on_a_new_scene():
   after = np.asarray(s.pipeline_state.scene.xi)
   assert not np.allclose(before, after)
   assert np.asarray(s.info["global"].curriculum.finished)[0] == N_ENVS
-  spawn = np.asarray(s.pipeline_state.scene.spawn_pos)
+  scene = s.pipeline_state.scene
+  spawn, yaw = np.asarray(scene.spawn_pos), np.asarray(scene.spawn_yaw)
   np.testing.assert_allclose(np.asarray(s.pipeline_state.data.qpos[:, :2]), spawn[:, :2], atol=1e-6)
-  np.testing.assert_allclose(np.asarray(s.pipeline_state.data.qpos[:, 3:7]),
-                             np.tile([1.0, 0, 0, 0], (N_ENVS, 1)), atol=1e-6)  # back at the spawn, upright
+  upright = np.stack([np.cos(yaw / 2), 0 * yaw, 0 * yaw, np.sin(yaw / 2)], axis=-1)
+  np.testing.assert_allclose(np.asarray(s.pipeline_state.data.qpos[:, 3:7]), upright, atol=1e-6)  # back at the spawn, upright
 
 
 def test_unfinished_environments_are_untouched_by_the_auto_reset():
