@@ -18,8 +18,10 @@ from mjx_tracks.envs.wrappers import batched_env
 
 N_ENVS = 2
 N_TERRAIN_ENVS, TERRAIN_SEED = 16, 4  # the mixed terrain task's reset: every kind drawn (checked)
-# compiled and stepped: one per direction, scene kind and robot; between them they run every
-# sampler, reward kind, direction and terrain kind (the mixed task draws each), so every other task,
+# compiled and stepped: one per direction, scene kind, robot and terrain world (the corridor's, the
+# spirals' in the open); between them they run every sampler, reward kind, direction and terrain
+# kind (the mixed task draws each corridor kind; spiral-down differs from spiral-up in its kind
+# only), so every other task,
 # differing from one of them in those keys only (checked below), runs code they compile; a task
 # differing in a size as well (a box pool) is traced to check its shapes
 RUN_TASKS = ("asc-inc-cog", "des-inc-ang", "nav", "mixed-terrain", "asc-inc-cog-r2", "spiral-up")
