@@ -31,11 +31,16 @@ def _heading(phi) -> jax.Array:
   return jnp.stack([jnp.cos(phi), jnp.sin(phi)], axis=-1)
 
 
+def landing_angle(xi) -> jax.Array:
+  """The centre line's angle where the landing starts, (steps - 1) angle (rad)."""
+  return (xi[3].astype(jnp.int32) - 1) * xi[1]
+
+
 def spiral_boxes(xi, pool: int) -> tuple[jax.Array, jax.Array, jax.Array]:
   """Centres, half-sizes (pool, 3) and yaws (pool,) of a spiral's steps and landing (m, rad)."""
   radius, angle, riser, steps = xi[0], xi[1], xi[2], xi[3].astype(jnp.int32)
   k = jnp.arange(pool)
-  end = (steps - 1) * angle  # rad, where the landing starts
+  end = landing_angle(xi)
   is_landing = k == steps - 1
   mid = (k + 0.5) * angle
   xy = jnp.where(is_landing[:, None], centre_line(radius, end) + LANDING_LENGTH / 2 * _heading(end),
@@ -51,8 +56,8 @@ def spiral_boxes(xi, pool: int) -> tuple[jax.Array, jax.Array, jax.Array]:
 
 def _landing_point(xi) -> tuple[jax.Array, jax.Array]:
   """The point 1 m onto the landing along the centre line (x, y, ground z; m) and its heading (rad)."""
-  radius, angle, riser, steps = xi[0], xi[1], xi[2], xi[3].astype(jnp.int32)
-  end = (steps - 1) * angle
+  radius, riser, steps = xi[0], xi[2], xi[3].astype(jnp.int32)
+  end = landing_angle(xi)
   xy = centre_line(radius, end) + GOAL_PAST_EDGE * _heading(end)
   return jnp.concatenate([xy, (steps * riser)[None]]), end
 

@@ -41,7 +41,7 @@ from scenes.scene import Ends, SceneState
 from scenes.staircase import (GOAL_ABOVE_TREAD, GOAL_HALFWIDTH, GOAL_PAST_EDGE, LANDING_LENGTH,
                               SPAWN_BEFORE_STAIRS, WIDTH, boxes_from_treads, park_unused, randomized_ends,
                               tread_starts, world_xml)
-from scenes.terrain_kinds import TERRAIN_PARAMS
+from scenes.terrain_kinds import TERRAIN_PARAMS, corridor_world
 
 POOL = 16  # boxes of every terrain world: the most any kind uses
 RAILS, RAIL_THICKNESS = 4, 0.1  # bars, m
@@ -193,13 +193,12 @@ class TerrainScene:
     unknown = [k for k in self.kinds if k not in TERRAIN_PARAMS]
     if not self.kinds or unknown:
       raise ValueError(f"terrain kinds must be a non-empty list of {sorted(TERRAIN_PARAMS)}, got {list(self.kinds)}")
-    if len({TERRAIN_PARAMS[k].corridor for k in self.kinds}) > 1:
-      raise ValueError(f"terrain kinds {list(self.kinds)} mix corridor kinds with spirals (which stand in the open)")
+    corridor_world(self.kinds)
 
   @property
   def corridor(self) -> bool:
     """Whether the world has the corridor's side walls (every kind but the spirals)."""
-    return TERRAIN_PARAMS[self.kinds[0]].corridor
+    return corridor_world(self.kinds)
 
   n_boxes = POOL
 

@@ -50,3 +50,13 @@ TERRAIN_PARAMS: dict[str, TerrainParams] = {
     "spiral_up": _SPIRAL,
     "spiral_down": _SPIRAL,
 }
+
+
+def corridor_world(kinds: tuple[str, ...]) -> bool:
+  """Whether terrain kinds stand in the corridor (else in the open, the spirals); ValueError if they
+  mix the two worlds, which compile to different programs."""
+  worlds = {TERRAIN_PARAMS[k].corridor for k in kinds}
+  if len(worlds) > 1:
+    raise ValueError(f"mixes corridor kinds with spirals (which stand in the open, without the corridor's walls): "
+                     f"{list(kinds)}")
+  return worlds.pop()

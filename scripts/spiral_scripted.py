@@ -27,6 +27,7 @@ from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: E402
 from mjx_tracks.sim.control import INCREMENT  # noqa: E402
 from mjx_tracks.sim.pose import chassis_rpy  # noqa: E402
 from mjx_tracks.tools.scripted import StairScript  # noqa: E402
+from scenes.spiral import landing_angle  # noqa: E402
 from train.evaluate import per_trial_figures, scene_config, suite_scenes, trial_runner  # noqa: E402
 
 STEER_GAIN = 1.5  # rad/s of yaw rate per rad of heading error
@@ -41,12 +42,12 @@ def _wrap(a):
 
 def desired_heading(xy, xi, goal, up: bool, lane: float):
   """Heading (rad) that follows the lane around the axis (0, radius), then makes for the goal point."""
-  radius, angle, steps = xi[0], xi[1], xi[3].astype(jnp.int32)
+  radius = xi[0]
   phi = jnp.arctan2(xy[0], radius - xy[1])  # angle around the axis, 0 at the first step
   off = jnp.hypot(xy[0], radius - xy[1]) - (radius + lane)  # m outside the lane
   correction = jnp.clip(LANE_GAIN * off, -LANE_MAX, LANE_MAX)
   along = phi + correction if up else phi - jnp.pi - correction
-  past = phi > (steps - 1) * angle if up else phi < 0.0  # on the landing (up) / before the stairs (down)
+  past = phi > landing_angle(xi) if up else phi < 0.0  # on the landing (up) / before the stairs (down)
   to_goal = jnp.arctan2(goal[1] - xy[1], goal[0] - xy[0])
   return jnp.where(past, to_goal, along)
 

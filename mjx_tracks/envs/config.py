@@ -22,7 +22,7 @@ import yaml
 from mjx_tracks.bounds import bound, violation
 from mjx_tracks.sim.physics import PhysicsConfig
 from scenes.navigation import MAX_FLOOR_OBSTACLES
-from scenes.terrain_kinds import TERRAIN_PARAMS
+from scenes.terrain_kinds import TERRAIN_PARAMS, corridor_world
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
 
@@ -124,8 +124,10 @@ def _validate_terrain(kinds: tuple[str, ...], ranges, key: str, terrain_task: bo
     require(bool(kinds) and all(k in TERRAIN_PARAMS for k in kinds), f"{key}.terrains",
             f"a terrain task needs a non-empty list of {list(TERRAIN_PARAMS)}, got {list(kinds)}")
     require(len(set(kinds)) == len(kinds), f"{key}.terrains", f"has duplicates: {list(kinds)}")
-    require(len({TERRAIN_PARAMS[k].corridor for k in kinds}) == 1, f"{key}.terrains",
-            f"mixes corridor kinds with spirals (which stand in the open, without the corridor's walls): {list(kinds)}")
+    try:
+      corridor_world(kinds)
+    except ValueError as e:
+      require(False, f"{key}.terrains", str(e))
   for kind, p in TERRAIN_PARAMS.items():
     r = getattr(ranges, kind)
     for name, (lo, hi) in zip(p.names, p.limits):
@@ -168,11 +170,10 @@ class SceneConfig:
     from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
     require(self.kind in SCENE_KINDS, f"{key}.kind", f"must be one of {SCENE_KINDS}, got {self.kind!r}")
     _validate_terrain(self.terrains, self.terrain, key, self.kind == "terrain")
-    open_kinds = [k for k in self.terrains if not TERRAIN_PARAMS[k].corridor] if self.kind == "terrain" else []
-    require(not (open_kinds and self.random_spawn), f"{key}.random_spawn",
-            f"not supported by {open_kinds}: spawns and goals lie on the stairs' centre line")
-    require(not (open_kinds and self.random_goal), f"{key}.random_goal",
-            f"not supported by {open_kinds}: spawns and goals lie on the stairs' centre line")
+    in_the_open = self.kind == "terrain" and not corridor_world(self.terrains)
+    for field in ("random_spawn", "random_goal"):
+      require(not (in_the_open and getattr(self, field)), f"{key}.{field}",
+              f"not supported by {list(self.terrains)}: spawns and goals lie on the stairs' centre line")
     lo, hi = self.nav_floor_height
     require(0.01 <= lo <= hi <= 0.5, f"{key}.nav_floor_height", f"needs 0.01 <= min <= max <= 0.5, got {[lo, hi]}")
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
