@@ -7,18 +7,15 @@ cd scripts && python evaluate_new_scenes.py ../results/studies/terrain [--trials
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 
-from mjx_tracks.envs.config import from_dict
 from train import evaluate
 from train.study.executor import STUDY_DB, read_cells, cell_folder_of
 
 
-def missing_scenes(run_dir: str) -> list[str]:
-  """Suite scenes of the run's task (today's suite) without an eval-<scene>.json in its folder."""
-  cfg = from_dict(json.load(open(os.path.join(run_dir, "run.json")))["config"])
+def missing_scenes(run_dir: str, cfg) -> list[str]:
+  """Suite scenes of the run's task config (today's suite) without an eval-<scene>.json in its folder."""
   return [s for s in evaluate.suite_scenes(cfg) if not os.path.exists(evaluate.report_path(run_dir, s, None))]
 
 
@@ -33,9 +30,10 @@ def main(argv: list[str] | None = None) -> int:
     run = cell_folder_of(args.study_folder, cid)
     if cell["status"] != "done" or not os.path.isdir(os.path.join(run, "policy")):
       continue
-    if args.tasks and json.load(open(os.path.join(run, "run.json")))["config"]["task"] not in args.tasks:
+    cfg = evaluate.run_config(run)
+    if args.tasks and cfg.task not in args.tasks:
       continue
-    for scene in missing_scenes(run):
+    for scene in missing_scenes(run, cfg):
       print(f"[{cid}] {scene}", flush=True)
       if evaluate.main([run, "--scene", scene, "--trials", str(args.trials), "--db", db]) != 0:
         return 2

@@ -16,7 +16,8 @@ import os
 import subprocess
 import sys
 
-from mjx_tracks.envs.config import from_dict
+from mjx_tracks.envs.config import TaskConfig
+from train.evaluate import run_config
 from train.study.executor import cell_folder_of, read_cells
 
 
@@ -27,27 +28,22 @@ def _finished(source: str) -> list[str]:
   return [cell_folder_of(source, cid) for cid, cell in sorted(read_cells(source).items()) if cell["status"] == "done"]
 
 
-def first_runs(source: str, tasks: list[str] | None) -> dict[str, str]:
-  """task -> the folder of its first finished run that has an exported policy."""
-  out: dict[str, str] = {}
+def first_runs(source: str, tasks: list[str] | None) -> dict[str, tuple[str, TaskConfig]]:
+  """task -> the folder and config of its first finished run that has an exported policy."""
+  out: dict[str, tuple[str, TaskConfig]] = {}
   for run in _finished(source):
     if not os.path.isdir(os.path.join(run, "policy")):
       continue
-    task = json.load(open(os.path.join(run, "run.json")))["config"]["task"]
-    if (not tasks or task in tasks) and task not in out:
-      out[task] = run
+    cfg = run_config(run)
+    if (not tasks or cfg.task in tasks) and cfg.task not in out:
+      out[cfg.task] = (run, cfg)
   return out
 
 
-def gif_scene(run: str) -> str:
-  """The scene a task's GIF shows: its hardest configuration, or uniform scenes (navigation)."""
-  cfg = from_dict(json.load(open(os.path.join(run, "run.json")))["config"])
-  return "hardest" if cfg.scene.has_hardest else "uniform"
-
-
-def render(task: str, run: str, out: str) -> dict:
-  """One GIF (OUT/<task>.gif) through train.evaluate --video; the trial's figures beside it."""
-  scene, report = gif_scene(run), os.path.join(out, f"{task}.json")
+def render(task: str, run: str, cfg: TaskConfig, out: str) -> dict:
+  """One GIF (OUT/<task>.gif) through train.evaluate --video: trial 0 on the task's hardest
+  configuration, or uniform scenes (navigation); the trial's figures beside it."""
+  scene, report = "hardest" if cfg.scene.has_hardest else "uniform", os.path.join(out, f"{task}.json")
   cmd = [sys.executable, "-m", "train.evaluate", run, "--scene", scene, "--trials", "1", "--out", report,
          "--db", os.path.join(out, "gifs.sqlite"), "--video", os.path.join(out, f"{task}.gif")]
   env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}  # beside training runs on the same GPUs
@@ -69,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
   os.makedirs(args.out, exist_ok=True)
   runs = first_runs(args.source, args.tasks)
   with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
-    done = list(pool.map(lambda t: render(t, runs[t], args.out), sorted(runs)))
+    done = list(pool.map(lambda t: render(t, *runs[t], args.out), sorted(runs)))
   for d in done:
     print(json.dumps(d)[:300], flush=True)
   index = {"command": "python render_gifs.py " + " ".join(sys.argv[1:] if argv is None else argv),

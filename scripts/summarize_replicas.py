@@ -14,6 +14,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from train.study.report import ci_text  # noqa: E402
 from train.study.statistics import LEVEL, iqm_intervals  # noqa: E402
 
 
@@ -31,8 +32,7 @@ def table(folder: str) -> list[str]:
   lines = [f"| scene | runs | success IQM [{LEVEL:.0%} CI] | progress IQM |", "|---|---|---|---|"]
   for scene, figs in sorted(per_scene(folder).items(), key=lambda kv: (kv[0] != "hardest", kv[0])):
     est = iqm_intervals(figs)
-    s, p = est["success"], est["progress"]
-    lines.append(f"| {scene} | {len(figs['success'])} | {s[0]:.2f} [{s[1]:.2f}, {s[2]:.2f}] | {p[0]:.2f} [{p[1]:.2f}, {p[2]:.2f}] |")
+    lines.append(f"| {scene} | {len(figs['success'])} | {ci_text(est['success'])} | {ci_text(est['progress'])} |")
   return lines
 
 

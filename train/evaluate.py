@@ -149,6 +149,12 @@ def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=la
   return core, rollout
 
 
+def run_config(run_dir: str) -> TaskConfig:
+  """The task config a run recorded in RUN_DIR/run.json."""
+  with open(os.path.join(run_dir, "run.json")) as f:
+    return from_dict(json.load(f)["config"])
+
+
 def trial_keys(trials: int, seed: int = EVAL_SEED):
   import jax  # noqa: PLC0415
   return jax.random.split(jax.random.PRNGKey(seed), trials)

@@ -23,7 +23,8 @@ IMPROVEMENT_METRICS = (("success", "hardest"), ("progress", "hardest"), ("succes
                        ("progress", "uniform"))
 
 
-def _ci(est: tuple[float, float, float] | None) -> str:
+def ci_text(est: tuple[float, float, float] | None) -> str:
+  """An estimate with its interval, "IQM [low, high]" to 2 decimals ("-" if there is none)."""
   return "-" if est is None else f"{est[0]:.2f} [{est[1]:.2f}, {est[2]:.2f}]"
 
 
@@ -47,7 +48,7 @@ def final_table(results: StudyResults) -> list[str]:
     fig = lambda m, s: results.final(group, task, budget, s, m)  # noqa: E731
     est = iqm_intervals({f"{m} {s}": fig(m, s) for m, s in FINAL_COLUMNS})
     lines.append(f"| {group} | {task} | {budget:,} | {_runs(results, group, task, budget)} | "
-                 f"{' | '.join(_ci(est.get(c)) for c in cols)} | "
+                 f"{' | '.join(ci_text(est.get(c)) for c in cols)} | "
                  f"{_mean_sd(fig('pitch_rate', 'hardest'))} | {_mean_sd(fig('tipped_over', 'hardest'), 2)} |")
   return lines
 
@@ -63,7 +64,7 @@ def suite_table(results: StudyResults) -> list[str]:
       if len(fig["success"]):
         est = iqm_intervals(fig)
         lines.append(f"| {group} | {task} | {budget:,} | {scene} | {len(fig['success'])} | "
-                     f"{_ci(est.get('success'))} | {_ci(est.get('progress'))} |")
+                     f"{ci_text(est.get('success'))} | {ci_text(est.get('progress'))} |")
   return lines if len(lines) > 2 else []
 
 
@@ -77,7 +78,7 @@ def improvement_table(results: StudyResults) -> list[str]:
       est = improvement({f"{m} {s}": (fig(a, m, s), fig(b, m, s)) for m, s in IMPROVEMENT_METRICS})
       if est:
         lines.append(f"| {group} | {budget:,} | {a} | {b} | " +
-                     " | ".join(_ci(est.get(f"{m} {s}")) for m, s in IMPROVEMENT_METRICS) + " |")
+                     " | ".join(ci_text(est.get(f"{m} {s}")) for m, s in IMPROVEMENT_METRICS) + " |")
   return lines
 
 
@@ -94,8 +95,8 @@ def generalization_table(results: StudyResults) -> list[str]:
       success = lambda t, scene: iqm_intervals({"x": results.final(group, t, budget, scene, "success")}).get("x")  # noqa: E731
       own = success(task, HARDEST + kind)
       special = [(t, success(t, "hardest")) for t, s in kinds.items() if s.kind == "terrain" and s.terrains == (kind,)]
-      lines.append(f"| {group} | {budget:,} | {kind} | {_ci(own)} | "
-                   f"{'; '.join(f'{t}: {_ci(e)}' for t, e in special) or '-'} |")
+      lines.append(f"| {group} | {budget:,} | {kind} | {ci_text(own)} | "
+                   f"{'; '.join(f'{t}: {ci_text(e)}' for t, e in special) or '-'} |")
   head = ["| group | budget | terrain kind | mixed policy, success on its hardest | specialist policy, success on its hardest |",
           "|---|---|---|---|---|"]
   return head + lines if lines else []
