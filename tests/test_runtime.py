@@ -50,18 +50,44 @@ with StopRequest() as stop:
 """
 
 
-def test_a_second_ctrl_c_quits_at_once():
+def _waiter():
   proc = subprocess.Popen([sys.executable, "-c", _WAITER], cwd=ROOT, stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, text=True)
   assert proc.stdout.readline().strip() == "ready"
+  return proc
+
+
+def test_a_second_ctrl_c_a_second_later_quits_at_once():
+  proc = _waiter()
   proc.send_signal(signal.SIGINT)
   assert proc.stdout.readline().startswith("SIGINT: stopping after this update")
   assert proc.stdout.readline().split() == ["requested", str(int(signal.SIGINT)), "130"]
   assert proc.poll() is None  # the first Ctrl-C only asks
+  proc.send_signal(signal.SIGINT)  # at once: the same keypress twice, not a decision to quit
+  assert proc.stdout.readline().startswith("SIGINT again: still stopping")
+  time.sleep(1.1)
   t = time.time()
   proc.send_signal(signal.SIGINT)
   assert proc.wait(10) == 130 and time.time() - t < 5
   assert "second interrupt: exiting at once" in proc.stdout.read()
+
+
+def test_sigterm_twice_at_once_as_timeout_and_schedulers_send_it_still_saves():
+  """`timeout` and batch schedulers signal the process and its group: two SIGTERMs at once. Neither
+  that nor later SIGTERMs quit without saving."""
+  proc = _waiter()
+  proc.send_signal(signal.SIGTERM)
+  assert proc.stdout.readline().startswith("SIGTERM: stopping after this update")
+  proc.send_signal(signal.SIGTERM)  # (sent together, the kernel may merge the two into one)
+  lines = [proc.stdout.readline(), proc.stdout.readline()]
+  assert any(line.startswith("SIGTERM again: still stopping") for line in lines), lines
+  assert ["requested", str(int(signal.SIGTERM)), "143"] in [line.split() for line in lines]
+  time.sleep(1.1)
+  proc.send_signal(signal.SIGTERM)
+  time.sleep(1.0)
+  assert proc.poll() is None  # still working towards its save
+  proc.kill()
+  proc.wait(10)
 
 
 _PLAN_AND_START = """

@@ -14,6 +14,8 @@ from train.server.__main__ import main as server_main
 from train.server.app import create_app
 from train.server.settings import Settings
 
+LOCAL = "http://127.0.0.1"  # a tokenless server answers only requests that name it by a loopback address
+
 
 @pytest.fixture()
 def served(tmp_path):
@@ -38,7 +40,7 @@ def served(tmp_path):
 
 def test_the_run_list_holds_every_run_with_its_latest_training_figures(served):
   settings, _ = served
-  runs = {r["run_id"]: r for r in TestClient(create_app(settings)).get("/api/runs").json()}
+  runs = {r["run_id"]: r for r in TestClient(create_app(settings), base_url=LOCAL).get("/api/runs").json()}
   a, b = runs["a"], runs["b"]
   assert (a["status"], a["task"], a["algo"], a["seed"], a["step"], a["steps_per_s"]) == ("done", "asc-inc-cog", "ppo", 0, 300, 350.0)
   assert (a["return_mean"], a["success_rate"], a["eps"]) == (0.4, 0.2, 0.3)  # the train row, not the probe
@@ -47,7 +49,7 @@ def test_the_run_list_holds_every_run_with_its_latest_training_figures(served):
 
 def test_one_run_its_statistics_evaluations_and_unknown_runs(served):
   settings, _ = served
-  client = TestClient(create_app(settings))
+  client = TestClient(create_app(settings), base_url=LOCAL)
   run = client.get("/api/runs/a").json()
   assert run["config"] == {"task": "asc-inc-cog"} and run["final"] == {"step": 300}
   assert [e["event"] for e in run["events"]] == ["started", "finished"]
@@ -63,14 +65,14 @@ def test_one_run_its_statistics_evaluations_and_unknown_runs(served):
 
 def test_the_policy_downloads_as_a_zip_only_from_inside_the_runs_folder(served, tmp_path):
   settings, _ = served
-  client = TestClient(create_app(settings))
+  client = TestClient(create_app(settings), base_url=LOCAL)
   r = client.get("/api/runs/a/policy")
   assert r.status_code == 200 and r.headers["content-type"] == "application/zip"
   names = zipfile.ZipFile(io.BytesIO(r.content)).namelist()
   assert sorted(names) == ["policy/params/data", "policy/policy.json"]
   (tmp_path / "elsewhere" / "policy").mkdir(parents=True)
   r = client.get("/api/runs/b/policy")
-  assert r.status_code == 403 and "outside the runs folder" in r.json()["detail"]
+  assert r.status_code == 403 and "outside the server's runs folder" in r.json()["detail"]
   os.symlink(tmp_path / "elsewhere" / "policy", tmp_path / "runs" / "a" / "policy-link")
   with pytest.raises(ValueError):  # a link out of the folder is outside too
     settings.inside_runs(str(tmp_path / "runs" / "a" / "policy-link"))
@@ -78,7 +80,7 @@ def test_the_policy_downloads_as_a_zip_only_from_inside_the_runs_folder(served, 
 
 def test_configurations_are_checked_by_the_command_lines_loader_and_errors_name_the_field(served):
   settings, _ = served
-  client = TestClient(create_app(settings))
+  client = TestClient(create_app(settings), base_url=LOCAL)
   assert "asc-inc-cog" in client.get("/api/tasks").json()
   ok = client.post("/api/validate", json={"task": "asc-inc-cog", "overrides": ["reward.cog_scale=0.5"]})
   assert ok.status_code == 200 and ok.json()["config"]["reward"]["cog_scale"] == 0.5
@@ -94,12 +96,11 @@ def test_configurations_are_checked_by_the_command_lines_loader_and_errors_name_
 
 def test_a_token_guards_every_call_and_binding_beyond_this_machine_needs_one(served, capsys):
   settings, _ = served
-  client = TestClient(create_app(Settings(settings.db, settings.runs_root, token="s3cret")))
+  client = TestClient(create_app(Settings(settings.db, settings.runs_root, token="s3cret")), base_url=LOCAL)
   for path in ("/api/runs", "/api/runs/a", "/api/tasks"):
     assert client.get(path).status_code == 401
     assert client.get(path, headers={"Authorization": "Bearer wrong"}).status_code == 401
     assert client.get(path, headers={"Authorization": "Bearer s3cret"}).status_code == 200
-    assert client.get(path, params={"token": "s3cret"}).status_code == 200
   assert client.post("/api/validate", json={"task": "asc-inc-cog"}).status_code == 401
   assert server_main(["--host", "0.0.0.0", "--db", settings.db]) == 2
   assert "needs a token" in capsys.readouterr().err
@@ -107,8 +108,10 @@ def test_a_token_guards_every_call_and_binding_beyond_this_machine_needs_one(ser
 
 def test_the_openapi_document_lists_every_endpoint(served):
   settings, _ = served
-  client = TestClient(create_app(settings))
+  client = TestClient(create_app(settings), base_url=LOCAL)
   paths = set(client.get("/openapi.json").json()["paths"])
   assert {"/api/runs", "/api/runs/{run_id}", "/api/runs/{run_id}/stats", "/api/runs/{run_id}/evals",
           "/api/runs/{run_id}/policy", "/api/tasks", "/api/validate"} <= paths
-  assert client.get("/docs").status_code == 200
+  docs = client.get("/docs")
+  assert docs.status_code == 200 and "/openapi.json" in docs.text
+  assert "http" not in docs.text.replace("http-equiv", "")  # nothing loaded from the internet

@@ -21,6 +21,8 @@ from train.server.settings import Settings
 FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
 COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))
 
+LOCAL = "http://127.0.0.1"  # a tokenless server answers only requests that name it by a loopback address
+
 
 @pytest.fixture()
 def cluster():
@@ -32,7 +34,7 @@ def cluster():
 def _server(tmp_path, client):
   settings = Settings(str(tmp_path / "runs" / "experiments.sqlite"), str(tmp_path / "runs"))
   launcher = Launcher(settings.db, settings.runs_root, client, ("cpu",), COMMANDS, poll_s=0.1).start()
-  return TestClient(create_app(settings, launcher)), launcher
+  return TestClient(create_app(settings, launcher), base_url=LOCAL), launcher
 
 
 def _wait(client: TestClient, launch_id: int, status: str, timeout_s: float = 60) -> dict:

@@ -1,5 +1,8 @@
 """Ctrl-C and SIGTERM during training: the first asks the loop to stop after the current update
-(it then checkpoints, exports and exits 130 / 143); a second one exits at once.
+(it then checkpoints, exports and exits 130 / 143). Only a second Ctrl-C (SIGINT) from the user, at
+least QUIT_AFTER_S after the first request, exits at once; further SIGTERMs never do. Schedulers
+(`timeout`, SLURM, `docker stop`, a process-group kill) send SIGTERM to the process and to its
+group, so one stop can arrive twice within microseconds: it must still save.
 
 Signals are read by a watcher thread through `signal.set_wakeup_fd`, so they are seen at once
 even while the main thread is inside a long XLA compilation or a device computation (Python
@@ -13,7 +16,9 @@ import signal
 import socket
 import sys
 import threading
+import time
 
+QUIT_AFTER_S = 1.0  # a second Ctrl-C sooner than this after the first request is the same keypress's echo
 EXIT_CODE = {signal.SIGINT: 130, signal.SIGTERM: 143}  # 128 + signal number, as shells report
 
 
@@ -22,6 +27,7 @@ class StopRequest:
 
   def __init__(self, stream=sys.stderr):
     self.requested: int | None = None
+    self.requested_at = 0.0  # time.monotonic() of the first request
     self.stream = stream
     self._old = {}
     self._old_fd = -1
@@ -50,13 +56,17 @@ class StopRequest:
         self._on_signal(signum)
 
   def _on_signal(self, signum: int) -> None:
-    if self.requested is not None:
+    if self.requested is None:
+      print(f"{signal.Signals(signum).name}: stopping after this update to save a checkpoint and the policy "
+            "(press Ctrl-C again to quit at once)", file=self.stream, flush=True)
+      self.requested_at = time.monotonic()
+      self.requested = signum  # after the message: the loop's own output cannot cut into it
+    elif signum == signal.SIGINT and time.monotonic() - self.requested_at >= QUIT_AFTER_S:
       print("second interrupt: exiting at once (the last checkpoint is kept)", file=self.stream, flush=True)
       os._exit(EXIT_CODE.get(self.requested, 130))
-    name = signal.Signals(signum).name
-    print(f"{name}: stopping after this update to save a checkpoint and the policy "
-          "(press Ctrl-C again to quit at once)", file=self.stream, flush=True)
-    self.requested = signum  # after the message: the loop's own output cannot cut into it
+    else:
+      print(f"{signal.Signals(signum).name} again: still stopping, saving first (Ctrl-C again in a second "
+            "quits at once)", file=self.stream, flush=True)
 
   @property
   def exit_code(self) -> int:

@@ -14,12 +14,14 @@ import importlib.resources
 import itertools
 import pathlib
 import re
+import reprlib
 import typing
 from typing import Any
 
 import yaml
 
 from mjx_tracks.bounds import bound, violation
+from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
 from scenes.navigation import MAX_FLOOR_OBSTACLES
 from scenes.terrain_kinds import TERRAIN_PARAMS, corridor_world
@@ -44,18 +46,74 @@ class ConfigError(ValueError):
     self.key = key
 
 
-def require(cond: bool, key: str, msg: str) -> None:
-  """Raises ConfigError("KEY: MSG") unless cond."""
+def require(cond: bool, key: str, msg) -> None:
+  """Raises ConfigError("KEY: MSG") unless cond; msg may be a callable, called only then."""
   if not cond:
-    raise ConfigError(f"{key}: {msg}", key)
+    raise ConfigError(f"{key}: {msg() if callable(msg) else msg}", key)
 
 
-PLAIN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")  # names that are folder and file names too
+_SHOW = reprlib.Repr()
+_SHOW.maxstring, _SHOW.maxother, _SHOW.maxlist, _SHOW.maxdict, _SHOW.maxlevel = 60, 60, 6, 6, 3
 
 
-def require_plain_name(name: str, key: str) -> None:
-  """ConfigError unless `name` is a plain name (letters, digits, _ . -; not starting with _ . -)."""
-  require(bool(PLAIN_NAME.match(name)), key, f"{name!r} is not a plain name (letters, digits, _ . -)")
+def show(value) -> str:
+  """A short repr of user input for a message: bounded in length and in the work it takes."""
+  return _SHOW.repr(value)
+
+
+PLAIN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")  # names that are folder and file names too
+
+
+def require_plain_name(name, key: str) -> None:
+  """ConfigError unless `name` is a plain name (letters, digits, _ . -; not starting with _ . -)
+  of at most MAX_NAME_CHARS characters."""
+  ok = isinstance(name, str) and len(name) <= MAX_NAME_CHARS and PLAIN_NAME.fullmatch(name) is not None
+  require(ok, key, lambda: f"{show(name)} is not a plain name (letters, digits, _ . -; at most "
+                           f"{MAX_NAME_CHARS} characters)")
+
+
+def _expanded_nodes(node, memo: dict) -> int:
+  """How many nodes a YAML node graph has once its aliases are expanded (ValueError for a cycle)."""
+  if id(node) in memo:
+    if memo[id(node)] is None:
+      raise ValueError("an alias refers to a node that contains it")
+    return memo[id(node)]
+  memo[id(node)] = None  # in progress
+  children = node.value if isinstance(node, yaml.SequenceNode) else \
+      [x for pair in node.value for x in pair] if isinstance(node, yaml.MappingNode) else []
+  memo[id(node)] = 1 + sum(_expanded_nodes(c, memo) for c in children)
+  return memo[id(node)]
+
+
+def load_yaml(text: str, source: str, key: str | None = None):
+  """YAML text (of `source`, named in messages; `key`: the ConfigError's key) read safely: no tags,
+  at most MAX_YAML_CHARS characters and MAX_YAML_NODES nodes with aliases expanded (an alias
+  bomb), no recursive aliases; ConfigError in one line otherwise."""
+  if len(text) > MAX_YAML_CHARS:
+    raise ConfigError(f"{source}: over {MAX_YAML_CHARS:,} characters of YAML", key)
+  loader = None
+  try:
+    loader = yaml.SafeLoader(text)
+    node = loader.get_single_node()
+    if node is None:
+      return None
+    if _expanded_nodes(node, {}) > MAX_YAML_NODES:
+      raise ConfigError(f"{source}: over {MAX_YAML_NODES:,} YAML nodes once its aliases (*name) are expanded", key)
+    return loader.construct_document(node)
+  except ConfigError:
+    raise
+  except yaml.YAMLError as e:
+    where = f" (line {e.problem_mark.line + 1}, column {e.problem_mark.column + 1})" \
+        if getattr(e, "problem_mark", None) else ""
+    why = str(getattr(e, "problem", None) or e).splitlines()[0]
+    raise ConfigError(f"{source}: not valid YAML{where}: {why}", key) from None
+  except ValueError as e:
+    raise ConfigError(f"{source}: {e}", key) from None
+  except RecursionError:
+    raise ConfigError(f"{source}: YAML nested too deeply", key) from None
+  finally:
+    if loader is not None:
+      loader.dispose()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -313,22 +371,24 @@ def _convert(value: Any, tp: Any, key: str) -> Any:
     return _build(tp, value, key)
   if origin is tuple:
     args = typing.get_args(tp)
-    require(isinstance(value, (list, tuple)), key, f"must be a list, got {value!r}")
+    require(isinstance(value, (list, tuple)), key, lambda: f"must be a list, got {show(value)}")
     if len(args) == 2 and args[1] is Ellipsis:
       return tuple(_convert(v, args[0], f"{key}[{i}]") for i, v in enumerate(value))
     require(len(value) == len(args), key, f"must have {len(args)} entries, got {len(value)}")
     return tuple(_convert(v, a, f"{key}[{i}]") for i, (v, a) in enumerate(zip(value, args)))
   if tp is float:
-    require(isinstance(value, (int, float)) and not isinstance(value, bool), key, f"must be a number, got {value!r}")
+    require(isinstance(value, (int, float)) and not isinstance(value, bool), key,
+            lambda: f"must be a number, got {show(value)}")
     return float(value)
   if tp is int:
-    require(isinstance(value, int) and not isinstance(value, bool), key, f"must be an integer, got {value!r}")
+    require(isinstance(value, int) and not isinstance(value, bool), key, lambda: f"must be an integer, got {show(value)}")
     return value
   if tp is bool:
-    require(isinstance(value, bool), key, f"must be true or false, got {value!r}")
+    require(isinstance(value, bool), key, lambda: f"must be true or false, got {show(value)}")
     return value
   if tp is str:
-    require(isinstance(value, (str, int)) and not isinstance(value, bool), key, f"must be a string, got {value!r}")
+    require(isinstance(value, (str, int)) and not isinstance(value, bool), key,
+            lambda: f"must be a string, got {show(value)}")
     return str(value)
   raise ConfigError(f"{key}: unsupported type {tp}")
 
@@ -337,7 +397,7 @@ def _build(cls, raw: dict, key: str):
   hints = typing.get_type_hints(cls)
   names = [f.name for f in dataclasses.fields(cls)]
   for k in raw:
-    require(k in names, f"{key}.{k}".lstrip("."), f"unknown key; known: {sorted(names)}")
+    require(k in names, f"{key}.{show(k)}".lstrip("."), lambda: f"unknown key; known: {sorted(names)}")
   missing = [n for n in names if n not in raw]
   require(not missing, key or "config", f"missing keys {missing}")
   built = cls(**{k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()})
@@ -364,21 +424,23 @@ def _merge(base: dict, over: dict, key: str = "") -> dict:
 
 def apply_override(raw: dict, item: str) -> dict:
   """raw with one dotted KEY=VALUE override (VALUE read as YAML) merged in."""
+  if not isinstance(item, str) or len(item) > MAX_OVERRIDE_CHARS:
+    raise ConfigError(f"override {show(item)}: a KEY=VALUE string of at most {MAX_OVERRIDE_CHARS} characters")
   key, sep, value = item.partition("=")
   if not sep or not key:
-    raise ConfigError(f"override {item!r}: expected KEY=VALUE, e.g. reward.cog_scale=0.5")
+    raise ConfigError(f"override {show(item)}: expected KEY=VALUE, e.g. reward.cog_scale=0.5")
   patch: dict = {}
   node = patch
   parts = key.split(".")
   for p in parts[:-1]:
     node[p] = {}
     node = node[p]
-  node[parts[-1]] = yaml.safe_load(value)
+  node[parts[-1]] = load_yaml(value, f"override {key}", key)
   return _merge(raw, patch)
 
 
 def _read_yaml(name: str) -> dict:
-  loaded = yaml.safe_load(config_dir().joinpath(f"{name}.yaml").read_text()) or {}
+  loaded = load_yaml(config_dir().joinpath(f"{name}.yaml").read_text(), f"{name}.yaml") or {}
   if not isinstance(loaded, dict):
     raise ConfigError(f"{name}.yaml: top level must be a mapping")
   return loaded

@@ -1,17 +1,18 @@
-"""`python -m train.server [--db PATH] [--runs DIR] [--host 127.0.0.1] [--port 8000] [--token T]`:
-serves the API (docs at /docs) with uvicorn, and runs its launches on a Dask cluster (started here:
-a worker per GPU and CPU slots, or --scheduler). Listening beyond this machine needs a token
-(--token or $MJX_TRACKS_TOKEN); every request must then carry it."""
+"""`python -m train.server [--db PATH] [--runs DIR] [--host 127.0.0.1] [--port 8000] [--token-file F]`:
+serves the dashboard and the API (docs at /docs) with uvicorn, and runs its launches on a Dask
+cluster (started here on loopback with TLS: a worker per GPU and CPU slots; or --scheduler).
+Listening beyond this machine needs a token (--token-file or $MJX_TRACKS_TOKEN); every request must
+then carry it. The README's server section states the threat model."""
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from train.db import DEFAULT_ROOT, default_path
-from train.server.auth import TOKEN_ENV, check_bind
+from train.server.auth import TOKEN_ENV, check_bind, read_token
 from train.server.settings import Settings
+from train.study.cluster import add_cluster_args
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -20,14 +21,18 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("--runs", default=DEFAULT_ROOT, help="the runs folder: files are served from below it only")
   p.add_argument("--host", default="127.0.0.1")
   p.add_argument("--port", type=int, default=8000)
-  p.add_argument("--token", default=os.environ.get(TOKEN_ENV), help=f"access token (default ${TOKEN_ENV})")
-  p.add_argument("--scheduler", metavar="tcp://HOST:8786", help="run launches on an existing Dask cluster")
-  p.add_argument("--gpus", help="local GPUs for launches, e.g. 0,1 (default: all)")
-  p.add_argument("--slots-per-gpu", type=int, default=1)
-  p.add_argument("--cpu-slots", type=int, help="runs at once on the CPU backend (default: 1 without GPUs, else 0)")
+  p.add_argument("--token-file", metavar="FILE", help=f"the access token, first line of FILE (mode 600); default "
+                 f"${TOKEN_ENV}; none: loopback only, without a token")
+  p.add_argument("--token", help=argparse.SUPPRESS)  # refused: a token on the command line shows in ps
+  add_cluster_args(p)
   args = p.parse_args(argv)
+  if args.token is not None:
+    print(f"error: --token would show the token to every user of this machine (ps, /proc); put it in a file "
+          f"(chmod 600) and pass --token-file FILE, or set ${TOKEN_ENV}", file=sys.stderr)
+    return 2
   try:
-    check_bind(args.host, args.token)
+    token = read_token(args.token_file)
+    check_bind(args.host, token)
   except ValueError as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
@@ -36,9 +41,9 @@ def main(argv: list[str] | None = None) -> int:
   from train.server.app import create_app  # noqa: PLC0415
   from train.server.launcher import Launcher  # noqa: PLC0415
   from train.study.cluster import make_client  # noqa: PLC0415
-  settings = Settings(args.db or default_path(args.runs), args.runs, args.token)
+  settings = Settings(args.db or default_path(args.runs), args.runs, token)
   try:
-    client, kinds = make_client(args.scheduler, args.gpus, args.slots_per_gpu, args.cpu_slots)
+    client, kinds = make_client(args)
   except (ValueError, OSError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2

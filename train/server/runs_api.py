@@ -9,13 +9,12 @@ import json
 import os
 import zipfile
 
-from fastapi import APIRouter, Depends, HTTPException, Request
+from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import FileResponse, StreamingResponse
 
-from train.server.auth import check_token
 from train.server.deps import db_of, run_or_404
 
-router = APIRouter(prefix="/api/runs", tags=["runs"], dependencies=[Depends(check_token)])
+router = APIRouter(prefix="/api/runs", tags=["runs"])
 LIST_FIELDS = ("run_id", "status", "task", "algo", "preset", "seed", "total_steps", "step", "steps_per_s",
                "return_mean", "success_rate", "eps", "started", "ended", "out_dir")
 
@@ -73,20 +72,19 @@ def get_evals(run_id: str, request: Request) -> list[dict]:
 
 @router.get("/{run_id}/policy")
 def download_policy(run_id: str, request: Request) -> StreamingResponse:
-  """The exported policy (RUN/policy/) as a zip; 403 if the run lies outside the runs folder."""
-  run = run_or_404(db_of(request), run_id)
+  """The exported policy (RUN/policy/) as a zip of its files inside the runs folder (a link out of
+  it is left out); 403 if the run lies outside the runs folder."""
+  run, settings = run_or_404(db_of(request), run_id), request.app.state.settings
   try:
-    folder = request.app.state.settings.inside_runs(os.path.join(run["out_dir"], "policy"))
+    folder = settings.inside_runs(os.path.join(run["out_dir"], "policy"))
   except ValueError as e:
-    raise HTTPException(status_code=403, detail=str(e)) from None
+    raise HTTPException(status_code=403, detail=f"run {run_id}: {e}") from None
   if not os.path.isdir(folder):
     raise HTTPException(status_code=404, detail=f"run {run_id} has no exported policy yet")
   buf = io.BytesIO()
   with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
-    for root, _, files in os.walk(folder):
-      for name in files:
-        path = os.path.join(root, name)
-        z.write(path, os.path.relpath(path, os.path.dirname(folder)))
+    for path in settings.files_below(folder):
+      z.write(os.path.realpath(path), os.path.relpath(path, os.path.dirname(folder)))
   buf.seek(0)
   return StreamingResponse(buf, media_type="application/zip",
                            headers={"Content-Disposition": f'attachment; filename="{run_id}-policy.zip"'})
@@ -94,12 +92,12 @@ def download_policy(run_id: str, request: Request) -> StreamingResponse:
 
 @router.get("/{run_id}/videos")
 def list_videos(run_id: str, request: Request) -> list[str]:
-  """The rollout videos (MP4) in the run's folder, e.g. from `train.evaluate --video`."""
-  run = run_or_404(db_of(request), run_id)
+  """The rollout videos (MP4) in the run's folder, e.g. from `train.evaluate --video`; none for a
+  run outside the runs folder, nor any file that links out of it."""
+  run, settings = run_or_404(db_of(request), run_id), request.app.state.settings
   folder = run["out_dir"]
-  if not os.path.isdir(folder):
-    return []
-  return sorted(f for f in os.listdir(folder) if f.endswith(".mp4"))
+  return sorted(os.path.basename(p) for p in settings.files_below(folder)
+                if os.path.dirname(p) == os.path.realpath(folder) and p.endswith(".mp4"))
 
 
 @router.get("/{run_id}/videos/{name}")
@@ -109,7 +107,7 @@ def get_video(run_id: str, name: str, request: Request) -> FileResponse:
   try:
     path = request.app.state.settings.inside_runs(os.path.join(run["out_dir"], name))
   except ValueError as e:
-    raise HTTPException(status_code=403, detail=str(e)) from None
+    raise HTTPException(status_code=403, detail=f"run {run_id}: {e}") from None
   if not name.endswith(".mp4") or not os.path.isfile(path):
-    raise HTTPException(status_code=404, detail=f"run {run_id} has no video {name!r}")
+    raise HTTPException(status_code=404, detail=f"run {run_id} has no video {name[:80]!r}")
   return FileResponse(path, media_type="video/mp4")

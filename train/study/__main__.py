@@ -13,6 +13,7 @@ import shlex
 import sys
 
 from mjx_tracks.envs.config import ConfigError
+from train.study.cluster import add_cluster_args
 from train.study.executor import STUDY_DB, cell_folder_of
 from train.study.spec import cells, load_study, runs_of
 
@@ -24,18 +25,14 @@ def parser() -> argparse.ArgumentParser:
                  help="top-level override, e.g. --set seeds=[0,1] or --set retries=2")
   p.add_argument("--plan", action="store_true", help="list the runs and stop")
   p.add_argument("--root", default="studies", help="where study folders go (default ./studies)")
-  p.add_argument("--scheduler", metavar="tcp://HOST:8786", help="an existing Dask cluster (its workers "
-                 "declare resources gpu=N and/or cpu=N: their run slots)")
-  p.add_argument("--gpus", help="local GPUs to use, e.g. 0,1 (default: all)")
-  p.add_argument("--slots-per-gpu", type=int, default=1, help="runs at once on one GPU (default 1)")
-  p.add_argument("--cpu-slots", type=int, help="runs at once on the CPU backend (default: 1 without GPUs, else 0)")
+  add_cluster_args(p)
   return p
 
 
 def _client(args):
   """(Dask client, the worker kinds it has)."""
   from train.study.cluster import make_client  # noqa: PLC0415
-  return make_client(args.scheduler, args.gpus, args.slots_per_gpu, args.cpu_slots)
+  return make_client(args)
 
 
 def main(argv=None) -> int:

@@ -1,11 +1,23 @@
-"""The study's default Dask cluster on this machine: one worker per GPU (CUDA_VISIBLE_DEVICES
-pinned) with `slots_per_gpu` run slots, and a CPU worker (JAX_PLATFORMS=cpu) with `cpu_slots`."""
+"""The Dask cluster that runs studies and the server's launches.
+
+Started here (the default), it is one worker per GPU (CUDA_VISIBLE_DEVICES pinned) with
+`slots_per_gpu` run slots and a CPU worker (JAX_PLATFORMS=cpu) with `cpu_slots`; every endpoint
+(scheduler, nannies, workers) listens on 127.0.0.1 only, speaks TLS with credentials made for this
+cluster alone (mutual TLS: a process without them cannot connect, not even another user of this
+machine), and no Dask dashboard is started. An existing cluster (`--scheduler`) on another host must
+be a `tls://` address with `--tls-ca-file`, `--tls-cert` and `--tls-key` (Dask's own TLS
+authentication); a loopback address is trusted as given.
+"""
 
 from __future__ import annotations
 
+import argparse
 import subprocess
+import urllib.parse
 
 QUIET = {"DASK_LOGGING__DISTRIBUTED": "error"}  # workers log errors only (the study prints progress)
+LOOPBACK_HOST = "127.0.0.1"  # where the local cluster's endpoints listen
+LOOPBACK = ("127.0.0.1", "localhost", "::1")  # host names a cluster address may have without TLS
 
 
 def local_gpus() -> list[str]:
@@ -15,6 +27,19 @@ def local_gpus() -> list[str]:
   except (OSError, subprocess.TimeoutExpired):
     return []
   return [str(i) for i, line in enumerate(out.splitlines()) if line.startswith("GPU ")]
+
+
+def add_cluster_args(p: argparse.ArgumentParser) -> None:
+  """The options of the cluster a command runs on (train.study, train.server)."""
+  p.add_argument("--scheduler", metavar="tls://HOST:8786",
+                 help="an existing Dask cluster (its workers declare resources gpu=N and/or cpu=N: their run "
+                      "slots); off this machine it must be tls:// with --tls-ca-file, --tls-cert, --tls-key")
+  p.add_argument("--tls-ca-file", help="with --scheduler: the CA certificate of the cluster's TLS")
+  p.add_argument("--tls-cert", help="with --scheduler: this client's certificate")
+  p.add_argument("--tls-key", help="with --scheduler: this client's private key")
+  p.add_argument("--gpus", help="local GPUs to use, e.g. 0,1 (default: all)")
+  p.add_argument("--slots-per-gpu", type=int, default=1, help="runs at once on one GPU (default 1)")
+  p.add_argument("--cpu-slots", type=int, help="runs at once on the CPU backend (default: 1 without GPUs, else 0)")
 
 
 def _nanny(slots: int, kind: str, env: dict, cls) -> dict:
@@ -34,30 +59,61 @@ def worker_specs(gpus: list[str], slots_per_gpu: int, cpu_slots: int) -> dict:
   return specs
 
 
+def _private(security) -> dict:
+  """A server's options that keep it to this machine and to holders of the cluster's credentials:
+  loopback, mutual TLS, no dashboard (its HTTP port, on loopback too, serves no routes)."""
+  return {"host": LOOPBACK_HOST, "protocol": "tls://", "security": security, "dashboard": False,
+          "dashboard_address": f"{LOOPBACK_HOST}:0"}
+
+
 def local_cluster(specs: dict):
-  """A SpecCluster of the given worker processes; a worker's death fails its task at once (the
-  study retries it and records the attempt), rather than Dask re-running it unrecorded."""
+  """A SpecCluster of the given worker processes, every endpoint private (_private) with temporary
+  credentials made here; a worker's death fails its task at once (the study retries it and records
+  the attempt), rather than Dask re-running it unrecorded."""
   import dask  # noqa: PLC0415
-  from distributed import Scheduler, SpecCluster  # noqa: PLC0415
+  from distributed import Scheduler, Security, SpecCluster  # noqa: PLC0415
   if not specs:
     raise ValueError("the cluster needs a GPU or a CPU slot")
-  dask.config.set({"distributed.scheduler.allowed-failures": 0, "logging.distributed": "error"})
-  return SpecCluster(workers=specs, scheduler={"cls": Scheduler, "options": {"dashboard_address": ":0"}},
-                     silence_logs=40)
+  dask.config.set({"distributed.scheduler.allowed-failures": 0, "logging.distributed": "error",
+                   # no HTTP routes (health, metrics, JSON info) on the scheduler's or workers' HTTP port
+                   "distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []})
+  security = Security.temporary()  # a self-signed CA and certificate, in memory, for this cluster only
+  workers = {name: {**w, "options": {**w["options"], **_private(security)}} for name, w in specs.items()}
+  return SpecCluster(workers=workers, scheduler={"cls": Scheduler, "options": _private(security)},
+                     security=security, silence_logs=40)
 
 
-def make_client(scheduler: str | None, gpus: str | None, slots_per_gpu: int, cpu_slots: int | None):
-  """(Dask client, the worker kinds it has): of an existing cluster (its workers declare gpu / cpu
-  resources), or of one started here on the given GPUs (default all) and CPU slots (default 1
-  without GPUs, else 0); ValueError on bad counts."""
+def remote_security(address: str, ca: str | None, cert: str | None, key: str | None):
+  """The distributed.Security for connecting to an existing cluster; ValueError unless it is on
+  loopback or a tls:// address with all three credential files."""
+  from distributed import Security  # noqa: PLC0415
+  parsed = urllib.parse.urlsplit(address if "://" in address else f"tcp://{address}")
+  files = (ca, cert, key)
+  if any(files) and not all(files):
+    raise ValueError("--tls-ca-file, --tls-cert and --tls-key go together")
+  if all(files):
+    if parsed.scheme != "tls":
+      raise ValueError(f"--scheduler {parsed.scheme}://...: TLS credentials need a tls:// address")
+    return Security(tls_ca_file=ca, tls_client_cert=cert, tls_client_key=key, require_encryption=True)
+  if parsed.hostname not in LOOPBACK:
+    raise ValueError(f"--scheduler on {parsed.hostname}: a cluster off this machine needs tls:// and "
+                     "--tls-ca-file, --tls-cert, --tls-key (Dask's TLS authentication)")
+  return None
+
+
+def make_client(args):
+  """(Dask client, the worker kinds it has) from the cluster options (add_cluster_args): of an
+  existing cluster, or of one started here on the given GPUs (default all) and CPU slots (default 1
+  without GPUs, else 0); ValueError on bad counts or an unprotected remote address."""
   from distributed import Client  # noqa: PLC0415
-  if scheduler:
-    client = Client(scheduler)
+  if args.scheduler:
+    security = remote_security(args.scheduler, args.tls_ca_file, args.tls_cert, args.tls_key)
+    client = Client(args.scheduler, security=security, timeout=30)
     kinds = {k for w in client.scheduler_info()["workers"].values() for k in w.get("resources", {})}
     return client, tuple(k for k in ("gpu", "cpu") if k in kinds)
-  chosen = gpus.split(",") if gpus else local_gpus()
-  cpu = cpu_slots if cpu_slots is not None else (0 if chosen else 1)
-  if slots_per_gpu < 1 or cpu < 0:
+  chosen = args.gpus.split(",") if args.gpus else local_gpus()
+  cpu = args.cpu_slots if args.cpu_slots is not None else (0 if chosen else 1)
+  if args.slots_per_gpu < 1 or cpu < 0:
     raise ValueError("--slots-per-gpu must be >= 1 and --cpu-slots >= 0")
-  client = Client(local_cluster(worker_specs(chosen, slots_per_gpu, cpu)))
+  client = Client(local_cluster(worker_specs(chosen, args.slots_per_gpu, cpu)))
   return client, tuple(k for k, n in (("gpu", len(chosen)), ("cpu", cpu)) if n)

@@ -7,10 +7,9 @@ from __future__ import annotations
 import dataclasses
 import pathlib
 
-import yaml
-
-from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config,
-                                    parse_mapping, require, require_plain_name)
+from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config, load_yaml,
+                                    parse_mapping, require, require_plain_name, show)
+from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
 from train.early_stop import parse_early_stop
 from train.evaluate import EVAL_TRIALS
 from train.presets import get_preset
@@ -83,25 +82,31 @@ class Cell:
 
 def _group(raw, i: int) -> GroupSpec:
   key = f"groups[{i}]"
-  require(isinstance(raw, dict), key, f"must be a mapping, got {raw!r}")
+  require(isinstance(raw, dict), key, lambda: f"must be a mapping, got {show(raw)}")
   g = parse_mapping(GroupSpec, {**GROUP_DEFAULTS, **raw}, key)
   require_plain_name(g.name, f"{key}.name")
   try:
     get_preset(g.algo, g.preset)
   except ValueError as e:
     raise ConfigError(f"{key}: {e}") from None
-  require(bool(g.steps) and all(n >= 1 for n in g.steps), f"{key}.steps", "one or more budgets >= 1")
-  require(g.backend in BACKENDS, f"{key}.backend", f"one of {BACKENDS}, got {g.backend!r}")
-  require(g.budgets in BUDGETS, f"{key}.budgets", f"one of {BUDGETS}, got {g.budgets!r}")
+  require(bool(g.steps) and all(1 <= n <= MAX_STEPS for n in g.steps), f"{key}.steps",
+          f"one or more budgets from 1 to {MAX_STEPS:,}")
+  require(len(g.set) <= MAX_OVERRIDES, f"{key}.set", f"at most {MAX_OVERRIDES} overrides")
+  require(g.backend in BACKENDS, f"{key}.backend", lambda: f"one of {BACKENDS}, got {show(g.backend)}")
+  require(g.budgets in BUDGETS, f"{key}.budgets", lambda: f"one of {BUDGETS}, got {show(g.budgets)}")
   require(g.budgets == "runs" or not g.early_stop, f"{key}.budgets",
           "milestones stand for smaller budgets of one run; an early stop would cut them short")
   return g
 
 
+def _check_tasks(spec: StudySpec) -> None:
+  for task in spec.tasks:
+    require(task in available_tasks(), "tasks", lambda: f"unknown task {show(task)}; known: {available_tasks()}")
+
+
 def _check_runs(spec: StudySpec) -> None:
   """Every task's config takes every group's overrides and early stop."""
   for task in spec.tasks:
-    require(task in available_tasks(), "tasks", f"unknown task {task!r}; known: {available_tasks()}")
     for i, g in enumerate(spec.groups):
       try:
         cfg = load_config(task, tuple(get_preset(g.algo, g.preset).config_overrides) + g.set)
@@ -123,11 +128,16 @@ def study_from_dict(raw: dict) -> StudySpec:
   names = [g.name for g in spec.groups]
   require(len(set(names)) == len(names), "groups", f"group names repeat: {names}")
   require(bool(spec.tasks) and bool(spec.seeds), "tasks / seeds", "each needs one or more entries")
-  require(len(set(spec.seeds)) == len(spec.seeds) and min(spec.seeds) >= 0, "seeds", "distinct integers >= 0")
-  require(spec.retries >= 0 and spec.eval_trials >= 1, "retries / eval_trials", "retries >= 0, eval_trials >= 1")
+  require(len(set(spec.seeds)) == len(spec.seeds) and 0 <= min(spec.seeds) and max(spec.seeds) <= MAX_SEED, "seeds",
+          f"distinct integers from 0 to {MAX_SEED}")
+  require(0 <= spec.retries <= MAX_RETRIES, "retries", f"from 0 to {MAX_RETRIES}")
+  require(1 <= spec.eval_trials <= MAX_TRIALS, "eval_trials", f"from 1 to {MAX_TRIALS:,}")
+  runs = len(spec.tasks) * len(spec.seeds) * sum(len(runs_of(g)) for g in spec.groups)
+  require(runs <= MAX_STUDY_RUNS, "study", f"{runs:,} runs; at most {MAX_STUDY_RUNS:,}")
+  _check_tasks(spec)
   for i, pair in enumerate(spec.compare):
     require(pair[0] != pair[1] and set(pair) <= set(spec.tasks), f"compare[{i}]",
-            f"two different tasks of the study, got {list(pair)}")
+            lambda: f"two different tasks of the study, got {show(list(pair))}")
   _check_runs(spec)
   return spec
 
@@ -145,7 +155,7 @@ def study_text(path: str) -> str:
 
 def load_study(path: str, overrides: tuple[str, ...] = ()) -> StudySpec:
   """A study file or shipped study NAME <- top-level KEY=VALUE overrides, validated."""
-  raw = yaml.safe_load(study_text(path)) or {}
+  raw = load_yaml(study_text(path), path) or {}
   for item in overrides:
     raw = apply_override(raw, item)
   return study_from_dict(raw)

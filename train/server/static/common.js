@@ -1,8 +1,6 @@
-// Shared by every page: the token (from ?token=, kept for links), API calls, small helpers.
-const TOKEN = new URLSearchParams(location.search).get("token");
-const withToken = (path) => TOKEN ? path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(TOKEN) : path;
+// Shared by every page: API calls, small helpers. The token travels as the login's HttpOnly cookie.
 async function api(path, options = {}) {
-  const headers = Object.assign({"Content-Type": "application/json"}, TOKEN ? {"Authorization": "Bearer " + TOKEN} : {});
+  const headers = {"Content-Type": "application/json"};
   const r = await fetch(path, Object.assign({headers}, options));
   const body = r.headers.get("content-type")?.includes("json") ? await r.json() : await r.text();
   if (!r.ok) { const e = new Error(typeof body === "string" ? body : JSON.stringify(body.detail)); e.status = r.status; e.body = body; throw e; }
@@ -14,7 +12,7 @@ const dur = (s) => s == null ? "-" : s < 120 ? `${Math.round(s)} s` : s < 7200 ?
 function nav(active) {
   const pages = [["/", "Runs"], ["/new", "New experiment"], ["/queue", "Queue"], ["/compare", "Compare"], ["/docs", "API"]];
   document.getElementById("nav").innerHTML = pages.map(([href, name]) =>
-    `<a href="${withToken(href)}" class="${name === active ? "active" : ""}">${name}</a>`).join("");
+    `<a href="${href}" class="${name === active ? "active" : ""}">${name}</a>`).join("");
 }
 // the training curves every run page and the compare page draw: statistics column -> title
 const CURVES = {return_mean: "return", progress_mean: "progress", success_rate: "success", eps: "eps",
