@@ -110,9 +110,11 @@ def test_stop_cancel_and_a_server_restart_that_resumes_the_run(tmp_path, cluster
     assert resumed.status_code == 201
     _wait(client, resumed.json()["id"], "running")
     t_end = time.time() + 30
-    while not client.post(f"/api/runs/{run['run_id']}/stop").json()["detail"].endswith("stop requested"):
+    while "resumed" not in [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]]:
       assert time.time() < t_end
       time.sleep(0.1)
+    time.sleep(0.3)  # its SIGTERM handler is set up after the record (a stop before it kills: -15)
+    assert client.post(f"/api/runs/{run['run_id']}/stop").json()["detail"].endswith("stop requested")
     assert _wait(client, resumed.json()["id"], "stopped")["rc"] == 143
     events = [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]]
     assert events == ["started", "interrupted", "resumed", "interrupted"]
@@ -187,4 +189,60 @@ def test_cancelling_a_study_cancels_its_waiting_runs(tmp_path, cluster, monkeypa
     (study,) = client.get("/api/studies").json()
     assert study["done"] < 3 and launch["ended"]
   finally:
+    launcher.stop()
+
+
+def _record_process(out, pid: int, phase: str) -> None:
+  import json
+  import socket
+  with open(f"{out}.pid", "w") as f:
+    json.dump({"pid": pid, "host": socket.gethostname(), "phase": phase}, f)
+
+
+def test_a_launch_that_cannot_start_is_recorded_failed_and_the_queue_goes_on(tmp_path, cluster):
+  client, launcher = _server(tmp_path, cluster)
+  db = ExperimentDB(str(tmp_path / "runs" / "experiments.sqlite"))
+  try:
+    broken = db.add_launch("run", {"task": "no-such-task", "steps": 100}, None)  # e.g. queued by an older version
+    good = client.post("/api/launches", json={"task": "asc-inc-cog", "steps": 200, "eval_trials": 0}).json()["id"]
+    failed = _wait(client, broken, "failed")
+    assert failed["error"].startswith("could not start: ConfigError") and "no-such-task" in failed["error"]
+    assert _wait(client, good, "done")["rc"] == 0  # the launcher thread lives on
+  finally:
+    launcher.stop()
+
+
+def test_a_restart_reconciles_each_running_launch_with_what_it_finds(tmp_path, cluster):
+  """After a SIGKILL of the server: a run that finished meanwhile is done (no resume, which
+  train.run would refuse) or queued for the evaluation it asked for; a launch whose process still
+  runs is followed until it ends; a stop reaches that process in its evaluation phase too."""
+  import subprocess
+  import sys
+  runs = tmp_path / "runs"
+  db = ExperimentDB(str(runs / "experiments.sqlite"))
+  outs = {name: runs / name for name in ("finished", "unevaluated", "evaluating")}
+  for i, (name, out) in enumerate(outs.items()):
+    (out / "checkpoints" / "300").mkdir(parents=True)
+    db.start(name, "asc-inc-cog", "ppo", "cpu", 0, {}, str(out), 300)
+    db.finish(name, "done", {"step": 300}, 300)
+  db.log_evals("finished", [{"scene": "hardest", "trial": 0, "progress": 1.0, "success": 1, "cog_deviation": 0.0,
+                             "pitch_rate": 0.0, "tipped_over": 0, "length": 10}])
+  ids = {name: db.add_launch("run", {"task": "asc-inc-cog", "steps": 300, "eval_trials": 4}, str(out))
+         for name, out in outs.items()}
+  for lid in ids.values():
+    db.set_launch(lid, status="running")
+  evaluator = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+  _record_process(outs["evaluating"], evaluator.pid, "evaluate")
+  launcher = Launcher(db.path, str(runs), cluster, ("cpu",), COMMANDS, poll_s=3600).start()  # no tick
+  try:
+    assert db.launch(ids["finished"])["status"] == "done"
+    assert (db.launch(ids["unevaluated"])["status"], db.launch(ids["unevaluated"])["kind"]) == ("queued", "evaluate")
+    assert db.launch(ids["evaluating"])["status"] == "running" and ids["evaluating"] in launcher.futures
+    client = TestClient(create_app(Settings(db.path, str(runs)), launcher), base_url=LOCAL)
+    assert client.post("/api/runs/evaluating/stop").json()["detail"].endswith("stop requested")
+    assert evaluator.wait(10) == -15  # SIGTERM reached the evaluation
+    launcher._tick()
+    assert db.launch(ids["evaluating"])["status"] == "done"  # its run's record says how it ended
+  finally:
+    evaluator.kill()
     launcher.stop()

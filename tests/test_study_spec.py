@@ -40,7 +40,13 @@ def test_a_run_plans_like_its_command_line(tmp_path):
     ({"groups": []}, "groups: must be a non-empty list"),
     ({"groups": [{**GROUP, "stepz": [1]}]}, r"groups\[0\].stepz: unknown key"),
     ({"groups": [{**GROUP, "preset": "huge"}]}, "unknown preset 'huge'"),
-    ({"groups": [{**GROUP, "steps": [0]}]}, "budgets >= 1"),
+    ({"groups": [{**GROUP, "steps": [0]}]}, "budgets from 1 to"),
+    ({"groups": [{**GROUP, "steps": [10**30]}]}, "budgets from 1 to"),
+    ({"eval_trials": 10**9}, "eval_trials: from 1 to"),
+    ({"seeds": [2**40]}, "seeds: distinct integers from 0 to"),
+    ({"name": "x" * 300}, "at most 64 characters"),
+    ({"name": "study\n"}, "not a plain name"),  # a trailing newline
+    ({"tasks": ["nope"], "compare": [["nope", "asc-inc-cog"]]}, "unknown task 'nope'"),  # not a compare error
     ({"groups": [GROUP, GROUP]}, "group names repeat"),
     ({"groups": [{**GROUP, "set": ["reward.cog_scal=1"]}]}, r"groups\[0\] \(ppo\) on asc-inc-cog: reward.cog_scal: unknown key"),
     ({"tasks": ["nav"], "groups": [{**GROUP, "early_stop": "success"}]}, "nav has no hardest configuration"),

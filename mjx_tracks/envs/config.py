@@ -397,7 +397,8 @@ def _build(cls, raw: dict, key: str):
   hints = typing.get_type_hints(cls)
   names = [f.name for f in dataclasses.fields(cls)]
   for k in raw:
-    require(k in names, f"{key}.{show(k)}".lstrip("."), lambda: f"unknown key; known: {sorted(names)}")
+    name = k if isinstance(k, str) and len(k) <= MAX_NAME_CHARS else show(k)
+    require(k in names, f"{key}.{name}".lstrip("."), lambda: f"unknown key; known: {sorted(names)}")
   missing = [n for n in names if n not in raw]
   require(not missing, key or "config", f"missing keys {missing}")
   built = cls(**{k: _convert(v, hints[k], f"{key}.{k}".lstrip(".")) for k, v in raw.items()})

@@ -1,20 +1,22 @@
 """The server's launches, run on a Dask cluster by the study executor's worker function
 (`train.study.worker.run_in_place`), never in the server's process: queued launches are submitted,
-finished ones recorded in the database's `launches` table. Launches found running when the server
-starts (it stopped while they ran) are followed again if their run still runs, else queued again
-to resume from their checkpoints."""
+finished ones recorded in the database's `launches` table. A launch that cannot start is recorded
+as failed, and the queue goes on. Launches found running when the server starts (it stopped while
+they ran) are reconciled with what is left of them (Launcher.start)."""
 
 from __future__ import annotations
 
 import os
 import signal
 import socket
+import sys
 import threading
+import traceback
 
 from train.db import ExperimentDB, utc_now
 from train.evaluate import EVAL_TRIALS
 from train.study.spec import Cell, study_from_dict
-from train.study.worker import EVALUATE, TRAIN, run_in_place
+from train.study.worker import EVALUATE, TRAIN, read_pid_file, run_in_place
 
 STOPPED = 143  # train.run's exit code after SIGTERM (checkpoint written, policy exported)
 
@@ -53,23 +55,52 @@ class Launcher:
     self.thread = threading.Thread(target=self._loop, name="launcher", daemon=True)
 
   def start(self) -> "Launcher":
-    """Takes up what was running when the server stopped: a run whose process still runs (on a
-    cluster that outlived the server) is followed again; any other is queued again, to resume
-    where a checkpoint exists. Then follows the queue in a thread."""
-    from distributed import Future  # noqa: PLC0415
-    alive = {os.path.abspath(r["out_dir"]) for r in self.db.runs() if r["status"] == "running"}
+    """Reconciles each launch that was running when the server stopped (_reconcile), then
+    follows the queue in a thread."""
     for launch in self.db.launches("running"):
-      out = launch["out_dir"] or ""
-      if os.path.abspath(out) in alive:
-        self.futures[launch["id"]] = Future(f"launch-{launch['id']}", self.client)
-        continue
-      resumable = launch["kind"] in ("run", "resume") and os.path.isdir(os.path.join(out, "checkpoints"))
-      kind = "resume" if resumable else launch["kind"]
-      self.db.set_launch(launch["id"], status="queued", kind=kind,
-                         out_dir=out if resumable or kind in ("evaluate", "study") else None,
-                         error=f"queued again ({kind}) after a server restart")
+      self._reconcile(launch)
     self.thread.start()
     return self
+
+  def _reconcile(self, launch: dict) -> None:
+    """A launch left running: followed again if its task is still on the cluster (one that outlived
+    the server) or its process still runs on this host; done (or queued for its evaluation) if its
+    run finished meanwhile; else queued again, to resume where a checkpoint exists."""
+    lid, out = launch["id"], launch["out_dir"] or ""
+    process = read_pid_file(out) if out else None
+    if self._cluster_knows(f"launch-{lid}"):
+      from distributed import Future  # noqa: PLC0415
+      self.futures[lid] = Future(f"launch-{lid}", self.client)
+      return
+    if process and process["host"] == socket.gethostname() and _alive(process["pid"]):
+      self.futures[lid] = ProcessWatch(process["pid"], process["phase"], out, self.db)
+      return
+    run = run_in(self.db, out)
+    if launch["kind"] in ("run", "resume") and run and run["status"] in FINISHED:
+      self._finished_meanwhile(launch, run)
+      return
+    resumable = launch["kind"] in ("run", "resume") and os.path.isdir(os.path.join(out, "checkpoints"))
+    kind = "resume" if resumable else launch["kind"]
+    self.db.set_launch(lid, status="queued", kind=kind,
+                       out_dir=out if resumable or kind in ("evaluate", "study") else None,
+                       error=f"queued again ({kind}) after a server restart")
+
+  def _finished_meanwhile(self, launch: dict, run: dict) -> None:
+    """Its training ended while no server watched: done, or queued to evaluate if it asked for an
+    evaluation that has no trials yet."""
+    wants = launch["spec"].get("eval_trials", EVAL_TRIALS) > 0 and not self.db.eval_groups(run["run_id"])
+    if wants:
+      self.db.set_launch(launch["id"], status="queued", kind="evaluate",
+                         error="its training finished while the server was down; queued to evaluate")
+    else:
+      self.db.set_launch(launch["id"], status="done", ended=utc_now(), rc=0,
+                         error="finished while the server was down")
+
+  def _cluster_knows(self, key: str) -> bool:
+    try:
+      return bool(self.client.run_on_scheduler(lambda dask_scheduler: key in dask_scheduler.tasks))
+    except Exception:  # noqa: BLE001  (a cluster that cannot say knows nothing we can follow)
+      return False
 
   def stop(self) -> None:
     self.done.set()
@@ -77,16 +108,27 @@ class Launcher:
 
   def _loop(self) -> None:
     while not self.done.wait(self.poll_s):
-      with self.lock:
-        for launch in self.db.launches("queued"):
-          self._submit(launch)
-        for lid, future in list(self.futures.items()):
-          if (not future.is_alive()) if isinstance(future, threading.Thread) else future.done():
-            self._settle(lid, future)
-          else:
-            launch = self.db.launch(lid)
-            if launch["status"] == "cancelled":  # its run may have started since the cancel
-              stop_run_in(self.db, launch["out_dir"])
+      try:
+        with self.lock:
+          self._tick()
+      except Exception:  # noqa: BLE001  (the queue must outlive any one failure: say it and go on)
+        print(f"launcher: {traceback.format_exc(limit=3)}", file=sys.stderr, flush=True)
+
+  def _tick(self) -> None:
+    for launch in self.db.launches("queued"):
+      try:
+        self._submit(launch)
+      except Exception as e:  # noqa: BLE001  (recorded as the launch's error; the next one starts)
+        self.futures.pop(launch["id"], None)
+        self.db.set_launch(launch["id"], status="failed", ended=utc_now(),
+                           error=f"could not start: {type(e).__name__}: {str(e)[:300]}")
+    for lid, future in list(self.futures.items()):
+      if (not future.is_alive()) if isinstance(future, threading.Thread) else future.done():
+        self._settle(lid, future)
+      else:
+        launch = self.db.launch(lid)
+        if launch["status"] == "cancelled":  # its run may have started since the cancel
+          stop_run_in(self.db, launch["out_dir"])
 
   def _submit(self, launch: dict) -> None:
     spec, kind = launch["spec"], launch["kind"]
@@ -151,8 +193,14 @@ class Launcher:
         res = future.result()
       except Exception as e:  # noqa: BLE001  (cancelled, or its worker died)
         res = {"rc": None, "log_tail": repr(e)}
+    if isinstance(future, ProcessWatch) and future.phase == "train" and res["rc"] == 0:
+      launch = self.db.launch(launch_id)  # its evaluation never started: the worker died with the server
+      run = run_in(self.db, launch["out_dir"])
+      if run is not None and launch["status"] != "cancelled":
+        return self._finished_meanwhile(launch, run)
     cancelled = self.db.launch(launch_id)["status"] == "cancelled"
-    status = "cancelled" if cancelled else "done" if res["rc"] == 0 else "stopped" if res["rc"] == STOPPED else "failed"
+    stopped = res["rc"] in (STOPPED, -signal.SIGTERM)  # saved and stopped, or stopped before it had set up
+    status = "cancelled" if cancelled else "done" if res["rc"] == 0 else "stopped" if stopped else "failed"
     self.db.set_launch(launch_id, status=status, ended=utc_now(), rc=res["rc"],
                        error="" if res["rc"] == 0 else res["log_tail"][-500:])
 
@@ -172,11 +220,55 @@ class Launcher:
       return f"launch {launch_id} cancelled"
 
 
+FINISHED = ("done", "stopped_early")  # run statuses of a training that ended as it should
+
+
+def run_in(db: ExperimentDB, out_dir: str | None) -> dict | None:
+  """The database's record of the run in out_dir (the newest, if several), or None."""
+  found = [r for r in db.runs() if out_dir and os.path.abspath(r["out_dir"]) == os.path.abspath(out_dir)]
+  return found[-1] if found else None
+
+
+def _alive(pid: int) -> bool:
+  import psutil  # noqa: PLC0415  (a dependency of distributed)
+  try:
+    return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+  except psutil.Error:
+    return False
+
+
+class ProcessWatch:
+  """A launch's process found running after a server restart, which no Dask future knows: done
+  when the process is gone, its outcome read from the run's record."""
+
+  def __init__(self, pid: int, phase: str, out: str, db: ExperimentDB):
+    self.pid, self.phase, self.out, self.db = pid, phase, out, db
+
+  def done(self) -> bool:
+    return not _alive(self.pid)
+
+  def cancel(self) -> None:
+    stop_run_in(self.db, self.out)
+
+  def result(self) -> dict:
+    run = run_in(self.db, self.out)
+    status = run["status"] if run else None
+    rc = 0 if status in FINISHED else STOPPED if status == "interrupted" else 1
+    log = self.out + ".log"
+    tail = open(log).read()[-2000:] if os.path.exists(log) else ""
+    return {"rc": rc, "log_tail": tail or f"its run ended {status}"}
+
+
 def stop_run_in(db: ExperimentDB, out_dir: str | None) -> bool:
-  """SIGTERM to the training process of the run in `out_dir` (this host only); True if sent."""
-  for run in db.runs():
-    if out_dir and os.path.abspath(run["out_dir"]) == os.path.abspath(out_dir) and run["status"] == "running":
-      if run["host"] == socket.gethostname() and run["pid"]:
-        os.kill(run["pid"], signal.SIGTERM)
-        return True
+  """SIGTERM to the process working on the run in `out_dir` (this host only): the phase the
+  launch's worker names (training or evaluation), else the running training the database knows;
+  True if sent."""
+  process = read_pid_file(out_dir) if out_dir else None
+  if process and process["host"] == socket.gethostname() and _alive(process["pid"]):
+    os.kill(process["pid"], signal.SIGTERM)
+    return True
+  run = run_in(db, out_dir)
+  if run and run["status"] == "running" and run["host"] == socket.gethostname() and run["pid"]:
+    os.kill(run["pid"], signal.SIGTERM)
+    return True
   return False

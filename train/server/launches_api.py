@@ -17,6 +17,7 @@ from train.server.fields import CriterionText, Name, Overrides, Seed, Steps, Tri
 from train.server.config_api import config_error
 from train.server.launcher import cell_of, stop_run_in, study_of
 from train.study.executor import STATE, STUDY_DB, read_cells, status_counts
+from train.study.worker import read_pid_file
 
 router = APIRouter(prefix="/api", tags=["launches"])
 
@@ -106,7 +107,7 @@ def cancel(launch_id: int, request: Request) -> dict:
 def stop(run_id: str, request: Request) -> dict:
   """SIGTERM to a running run (it checkpoints, exports and ends 'interrupted'); for any other a no-op."""
   run = run_or_404(db_of(request), run_id)
-  if run["status"] != "running":
+  if run["status"] != "running" and read_pid_file(run["out_dir"]) is None:  # neither training nor evaluating
     return {"detail": f"run {run_id} is {run['status']}; nothing to stop"}
   sent = stop_run_in(db_of(request), run["out_dir"])
   return {"detail": f"run {run_id}: stop requested" if sent else f"run {run_id} runs on another host; not stopped"}

@@ -5,8 +5,10 @@ run folder back as a tar."""
 from __future__ import annotations
 
 import io
+import json
 import os
 import shutil
+import socket
 import subprocess
 import sys
 import tarfile
@@ -31,21 +33,49 @@ def unpack(data: bytes, folder: str) -> None:
     tar.extractall(folder, filter="data")
 
 
-def _call(argv: list[str], log_path: str) -> int:
+def pid_file(out: str) -> str:
+  """Where a run in place names the process of its current phase: OUT.pid (beside OUT.log)."""
+  return out + ".pid"
+
+
+def read_pid_file(out: str) -> dict | None:
+  """{"pid", "host", "phase"} of the process now working on the run in `out`, if one is recorded."""
+  try:
+    with open(pid_file(out)) as f:
+      return json.load(f)
+  except (OSError, ValueError):
+    return None
+
+
+def _call(argv: list[str], log_path: str, pid_path: str | None = None, phase: str = "") -> int:
+  """Runs argv, output to log_path; with pid_path, names the process there while it runs."""
   with open(log_path, "a") as log:
-    return subprocess.call(argv, stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
+    proc = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
+    if pid_path:
+      tmp = f"{pid_path}.tmp"
+      with open(tmp, "w") as f:
+        json.dump({"pid": proc.pid, "host": socket.gethostname(), "phase": phase}, f)
+      os.replace(tmp, pid_path)
+    try:
+      return proc.wait()
+    finally:
+      if pid_path and os.path.exists(pid_path):
+        os.remove(pid_path)
 
 
 def _train_then_evaluate(run_args: list[str], eval_args: list[str], out: str, db: str, resume: bool, train: bool,
-                         commands: tuple[tuple[str, ...], tuple[str, ...]], log: str) -> tuple[str, int]:
+                         commands: tuple[tuple[str, ...], tuple[str, ...]], log: str,
+                         pid_path: str | None = None) -> tuple[str, int]:
   """Trains into `out` (resuming it if asked; not at all if not train), then, if that went well and
-  there are evaluation arguments, evaluates; (phase reached, its exit code)."""
+  there are evaluation arguments, evaluates; (phase reached, its exit code). With pid_path, each
+  phase's process is named there while it runs (so a stop reaches the evaluation too)."""
   phase, rc = "train", 0
   if train:
     given = ["--resume", out] if resume else [*run_args, "--out", out]
-    rc = _call([sys.executable, *commands[0], *given, "--db", db], log)
+    rc = _call([sys.executable, *commands[0], *given, "--db", db], log, pid_path, "train")
   if rc == 0 and eval_args:
-    phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log)
+    phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log, pid_path,
+                                  "evaluate")
   return phase, rc
 
 
@@ -75,7 +105,7 @@ def run_in_place(run_args: list[str], eval_args: list[str], out: str, db: str, r
   (resuming it if asked; not at all if not train) with its records in `db`, then evaluates;
   {"rc", "phase", "log_tail", "worker"}."""
   log = out + ".log"  # beside the run folder (train.run wants a new folder empty): every attempt's output
-  phase, rc = _train_then_evaluate(run_args, eval_args, out, db, resume, train, commands, log)
+  phase, rc = _train_then_evaluate(run_args, eval_args, out, db, resume, train, commands, log, pid_file(out))
   return {"rc": rc, "phase": phase, "log_tail": open(log).read()[-2000:] if os.path.exists(log) else "",
           "worker": _worker_name()}
 
