@@ -157,3 +157,47 @@ def test_a_run_whose_evaluation_failed_is_evaluated_again_even_after_a_stopped_a
   json.dump({"total_steps": 400}, open(os.path.join(cell_folder(folder, cells(spec)[0]), "run.json"), "w"))
   runner._submit(cid)  # ... unless its checkpoints reach its total steps
   assert runner.client.calls[-1][3] is False
+
+
+_STUDY_MAIN = """
+import json, sys
+from train.study.cluster import local_cluster
+from train.study.executor import StudyRunner, run_until_done_or_stopped
+from train.study.spec import study_from_dict
+from distributed import Client, Nanny
+if __name__ == "__main__":
+  study, folder, scratch, commands = json.loads(sys.argv[1])
+  specs = {"w": {"cls": Nanny, "options": {"nthreads": 1, "resources": {"cpu": 1}, "local_directory": scratch,
+                                           "env": {"TMPDIR": scratch, "FAKE_SLOW_SEED": "0"}}}}
+  runner = StudyRunner(study_from_dict(study), folder, Client(local_cluster(specs)), tuple(map(tuple, commands)),
+                       backends=("cpu",), progress_every=0.5)
+  sys.exit(run_until_done_or_stopped(runner))
+"""
+
+
+def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_nothing_behind(tmp_path):
+  """A scheduler's SIGTERM reaches the study process alone: it forwards it to the runs it started,
+  which save; their folders come back; no run process nor scratch folder is left; exit 143."""
+  import subprocess
+  import sys
+
+  import psutil
+  scratch, folder = tmp_path / "scratch", str(tmp_path / "study")
+  scratch.mkdir()
+  study = {**STUDY, "tasks": ["asc-inc-cog"], "seeds": [0], "compare": []}
+  proc = subprocess.Popen([sys.executable, "-c", _STUDY_MAIN, json.dumps([study, folder, str(scratch), COMMANDS])],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+  t_end, runs = time.time() + 120, []
+  while not runs:
+    assert time.time() < t_end and proc.poll() is None, proc.stdout.read() if proc.poll() is not None else ""
+    runs = [p for p in psutil.Process(proc.pid).children(recursive=True) if FAKE in " ".join(p.cmdline())]
+    time.sleep(0.2)
+  time.sleep(2.5)  # a checkpoint or two
+  proc.send_signal(signal.SIGTERM)
+  assert proc.wait(90) == 143, proc.stdout.read()
+  assert not [p for p in runs if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
+  (record,) = json.load(open(os.path.join(folder, "state.json")))["cells"].values()
+  assert record["status"] == "queued" and record["attempts"][-1]["stopped"] and record["attempts"][-1]["rc"] == 143
+  (cell,) = cells(study_from_dict(study))
+  assert os.listdir(os.path.join(cell_folder(folder, cell), "checkpoints"))  # came back: the next start resumes
+  assert not list(scratch.glob("study-cell-*"))

@@ -374,5 +374,14 @@ def main(argv: list[str] | None = None) -> int:
   return 0
 
 
+def _main() -> int:
+  """main, quiet when its reader goes away (`python -m train.db export RUN --csv | head`)."""
+  try:
+    return main()
+  except BrokenPipeError:
+    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit's flush
+    return 0
+
+
 if __name__ == "__main__":
-  sys.exit(main())
+  sys.exit(_main())

@@ -25,6 +25,7 @@ import sys
 import numpy as np
 
 from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig, from_dict
+from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from scenes.staircase import STAIR_HARD, STAIR_PARAMS
 from scenes.terrain_kinds import TERRAIN_PARAMS
 
@@ -275,7 +276,9 @@ def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: Tas
 
 
 def _write_report(args, meta: dict, scene: str, budget: int | None, policy_step, per_trial: dict) -> str:
-  """RUN/eval-<scene>[@<budget>].json (or --out) and the database's trial rows; returns the path."""
+  """RUN/eval-<scene>[@<budget>].json (or --out) and the database's trial rows; returns the path.
+  A report of more trials already there is kept, with its rows: this one goes beside it
+  (fewer_trials_path) and not to the database."""
   import jax  # noqa: PLC0415
   report = {
       "run_id": meta["run_id"], "task": meta["task"], "algo": meta["algo"], "scene": scene, "budget": budget,
@@ -286,10 +289,30 @@ def _write_report(args, meta: dict, scene: str, budget: int | None, policy_step,
       "device": str(jax.devices()[0]), "command": "python -m train.evaluate " + " ".join(args.argv),
       "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
   out = args.out or report_path(args.run_dir, scene, budget)
+  fuller = None if args.out else _trials_in(out)
+  if fuller is not None and fuller > args.trials:
+    out = fewer_trials_path(out, args.trials)
+    print(f"note: kept {report_path(args.run_dir, scene, budget)} ({fuller} trials) and its database rows; "
+          f"this {args.trials}-trial result goes to {out} only", file=sys.stderr)
   with open(out, "w") as f:
     json.dump(report, f, indent=1)
-  _record_trials(args, meta["run_id"], scene, budget, per_trial)
+  if fuller is None or fuller <= args.trials:
+    _record_trials(args, meta["run_id"], scene, budget, per_trial)
   return out
+
+
+def _trials_in(path: str) -> int | None:
+  """The trial count of the report at path, if one is there and readable."""
+  try:
+    with open(path) as f:
+      return int(json.load(f)["trials"])
+  except (OSError, ValueError, KeyError, TypeError):
+    return None
+
+
+def fewer_trials_path(path: str, trials: int) -> str:
+  """Where a report of fewer trials than the one at path goes: eval-<scene>.<N>-trials.json."""
+  return f"{path[:-len('.json')]}.{trials}-trials.json"
 
 
 def _summary(task: str, scene: str, budget: int | None, trials: int, per_trial: dict, out: str) -> str:
@@ -316,6 +339,19 @@ def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
   return [(scene, budgets) for scene in scenes]
 
 
+def _run_meta(run_json: str) -> dict:
+  """A run's run.json; ValueError in one line if it is unreadable or not a run's record."""
+  try:
+    with open(run_json) as f:
+      meta = json.load(f)
+  except (OSError, ValueError) as e:
+    raise ValueError(f"{run_json} is not readable JSON ({str(e).splitlines()[0][:120]})") from None
+  missing = [k for k in ("run_id", "task", "algo", "config") if not isinstance(meta, dict) or k not in meta]
+  if missing:
+    raise ValueError(f"{run_json} is not a run's record (no {', '.join(missing)})")
+  return meta
+
+
 def main(argv: list[str] | None = None) -> int:
   args = parser().parse_args(argv)
   args.argv = sys.argv[1:] if argv is None else argv
@@ -323,14 +359,14 @@ def main(argv: list[str] | None = None) -> int:
   if not os.path.exists(run_json):
     print(f"error: {args.run_dir} is not a run directory (no run.json)", file=sys.stderr)
     return 2
-  if args.trials < 1 or not 0.0 <= args.eps <= 1.0:
-    print("error: --trials must be >= 1 and --eps in [0, 1]", file=sys.stderr)
+  if not 1 <= args.trials <= MAX_TRIALS or not 0.0 <= args.eps <= 1.0 or not 0 <= args.seed <= MAX_SEED:
+    print(f"error: --trials must be from 1 to {MAX_TRIALS:,}, --eps in [0, 1], --seed from 0 to {MAX_SEED}",
+          file=sys.stderr)
     return 2
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
-  with open(run_json) as f:
-    meta = json.load(f)
   try:
+    meta = _run_meta(run_json)
     cfg = from_dict(meta["config"])
     for scene, budgets in _jobs(args, cfg):
       for line in _evaluate(args, meta, scene, budgets, cfg):

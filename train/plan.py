@@ -12,6 +12,7 @@ import secrets
 from typing import Any
 
 from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
+from mjx_tracks.limits import MAX_ENVS, MAX_SEED, MAX_STEPS
 from train.early_stop import EarlyStop, parse_early_stop
 from train.presets import get_preset
 
@@ -65,6 +66,8 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   except json.JSONDecodeError as e:
     raise RunError(f"--resume {args.resume}: run.json is corrupt ({e})")
   total = meta["total_steps"] if args.steps is None else args.steps
+  if not 1 <= total <= MAX_STEPS:
+    raise RunError(f"--steps must be from 1 to {MAX_STEPS:,}")
   from train.checkpoints import checkpoint_dir, saved_steps, trained_to  # noqa: PLC0415  (orbax: only when resuming)
   steps = saved_steps(args.resume)
   if not steps:
@@ -137,12 +140,14 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   overrides = tuple(preset.config_overrides) + tuple(args.set)
   cfg = load_config(args.task, overrides)
   num_envs = preset.num_envs if args.num_envs is None else args.num_envs
-  if num_envs < 1:
-    raise RunError("--num-envs must be >= 1")
+  if not 1 <= num_envs <= MAX_ENVS:
+    raise RunError(f"--num-envs must be from 1 to {MAX_ENVS:,}")
   _check_devices(num_envs)
   steps = preset.num_timesteps if args.steps is None else args.steps
-  if steps < 1:
-    raise RunError("--steps must be >= 1")
+  if not 1 <= steps <= MAX_STEPS:
+    raise RunError(f"--steps must be from 1 to {MAX_STEPS:,}")
+  if not 0 <= seed <= MAX_SEED:
+    raise RunError(f"--seed must be from 0 to {MAX_SEED}")
   run_id = new_run_id(args.task, algo, seed)
   out_dir = os.path.abspath(args.out or os.path.join("runs", run_id))
   if _primary() and os.path.exists(out_dir) and os.listdir(out_dir):  # process 0 may have begun it

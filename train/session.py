@@ -11,7 +11,7 @@ from typing import Any
 import jax
 
 from train.build import Training, build, compile_update, init_state, make_evaluator
-from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, export_policy
+from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
 from train.evaluate import milestone_folder
 from train.loop import Checkpointer, Loop, LoopResult
 from train.mesh import from_host, to_host
@@ -43,6 +43,8 @@ def prepare(plan: RunPlan, options: SessionOptions = SessionOptions()) -> Prepar
   if not plan.resume:
     return Prepared(t, init_state(t, plan.seed), 0)
   state, step = _restore(t, RunCheckpoints(plan.out_dir, options.keep_checkpoints))
+  print(f"resuming run {plan.run_id} from its checkpoint at step {step:,} ({checkpoint_dir(plan.out_dir)}/{step}), "
+        f"to {plan.total_steps:,} steps", flush=True)
   return Prepared(dataclasses.replace(t, plan=dataclasses.replace(plan, start_step=step)), state, step)
 
 

@@ -66,7 +66,7 @@ def main(argv=None) -> int:
 
 
 def _run(spec, folder: str, args) -> int:
-  from train.study.executor import StudyRunner  # noqa: PLC0415  (distributed: only when running)
+  from train.study.executor import StudyRunner, run_until_done_or_stopped  # noqa: PLC0415  (distributed)
   try:
     client, kinds = _client(args)
   except (ValueError, OSError) as e:
@@ -75,17 +75,7 @@ def _run(spec, folder: str, args) -> int:
   if not kinds:
     print("error: the cluster has no worker with a gpu or cpu resource", file=sys.stderr)
     return 2
-  runner = StudyRunner(spec, folder, client, backends=kinds)
-  try:
-    with client:
-      counts = runner.run()
-  except KeyboardInterrupt:
-    n = runner.state.counts()
-    print(f"\ninterrupted: {n['done']} of {sum(n.values())} runs done; the same command continues the study",
-          file=sys.stderr)
-    return 130
-  print(f"study {spec.name}: {counts['done']} runs done, {counts['failed']} failed -> {folder} (state.json)")
-  return 0 if counts["failed"] == 0 else 1
+  return run_until_done_or_stopped(StudyRunner(spec, folder, client, backends=kinds))
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ import dataclasses
 import json
 import os
 import shutil
+import signal
 import sys
 import threading
 import time
@@ -20,6 +21,7 @@ from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
 
 STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
 STATE = "state.json"  # every cell's status and attempts
+STOP_WAIT_S = 300.0  # how long a stopped study waits for its runs to save a checkpoint and come back
 
 
 def cell_folder_of(study_folder: str, cell_id: str) -> str:
@@ -121,6 +123,7 @@ class StudyRunner:
     self.spec, self.folder, self.client, self.commands, self.stream = spec, folder, client, commands, stream
     self.backends = backends
     self.cells = {c.id: c for c in cells(spec)}
+    self.submitted: list = []  # every attempt's future, in order
     os.makedirs(os.path.join(folder, "runs"), exist_ok=True)
     from train.study.results import write_spec  # noqa: PLC0415  (results imports this module)
     write_spec(folder, spec)
@@ -142,8 +145,9 @@ class StudyRunner:
     return self.client.submit(run_cell, cell.train_args(), eval_args, resume, train, self.commands,
                               key=f"{cid}/attempt-{len(record['attempts'])}", pure=False, resources={backend: 1})
 
-  def _settle(self, cid: str, future) -> bool:
-    """Records an attempt's outcome; True if the cell should be tried again."""
+  def _settle(self, cid: str, future, stopped: bool = False) -> bool:
+    """Records an attempt's outcome (stopped: by the study's own stop, not counted as a failure);
+    True if the cell should be tried again."""
     record = self.state.cells[cid]
     attempt = record["attempts"][-1]
     try:
@@ -160,6 +164,8 @@ class StudyRunner:
           ExperimentDB(self.mirror_db).import_runs(os.path.join(local, RUN_DB), local)
     attempt.update(ended=time.time(), rc=res["rc"], phase=res["phase"], worker=res["worker"],
                    error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
+    if stopped and res["rc"] != 0:
+      attempt.update(stopped=True, error=attempt["error"] or "the study was stopped")
     db.log_attempt(self.spec.name, cid, len(record["attempts"]), attempt, run_id_in(local))
     failures = sum(1 for a in record["attempts"] if a["rc"] != 0 and not a.get("stopped"))
     retry = res["rc"] != 0 and failures <= self.spec.retries
@@ -181,7 +187,7 @@ class StudyRunner:
     from distributed import as_completed  # noqa: PLC0415
     t0, finished = time.time(), 0
     todo = [cid for cid, c in self.state.cells.items() if c["status"] != "done"]
-    pending, submitted = as_completed(), []
+    pending, submitted = as_completed(), self.submitted
     for cid in todo:
       submitted.append(self._submit(cid))
       pending.add(submitted[-1])
@@ -210,3 +216,75 @@ class StudyRunner:
       self._report(t0, finished)
       last = time.time()
     return self.state.counts()
+
+  def drain(self, timeout_s: float = STOP_WAIT_S) -> int:
+    """After a stop request: SIGTERM to the runs of this study on this machine (each saves a
+    checkpoint and exits), then every attempt that comes back within timeout_s is recorded as
+    stopped, its run folder kept for the next start; returns how many came back."""
+    import psutil  # noqa: PLC0415  (a dependency of distributed)
+    procs = run_processes(self.commands)
+    for proc in procs:
+      try:
+        proc.send_signal(signal.SIGTERM)
+      except psutil.Error:
+        pass
+    psutil.wait_procs(procs, timeout=timeout_s)
+    back, t_end = 0, time.time() + 30  # the workers pack each run folder and return it
+    for future in [f for f in self.submitted if self.state.cells[f.key.rsplit("/attempt-", 1)[0]]["status"] == "running"]:
+      try:
+        future.result(timeout=max(t_end - time.time(), 0.1))
+      except Exception:  # noqa: BLE001  (not back in time, or lost: recorded as such below)
+        pass
+      if future.done():
+        self._settle(future.key.rsplit("/attempt-", 1)[0], future, stopped=True)
+        back += 1
+    self.client.cancel([f for f in self.submitted if not f.done()])
+    self.state.save()
+    return back
+
+
+def run_processes(commands) -> list:
+  """This process's descendants that run one of the commands (train.run, train.evaluate)."""
+  import psutil  # noqa: PLC0415
+  found = []
+  for proc in psutil.Process().children(recursive=True):
+    try:
+      argv = proc.cmdline()
+    except psutil.Error:
+      continue
+    if any(argv[1:1 + len(c)] == list(c) for c in commands):
+      found.append(proc)
+  return found
+
+
+def run_until_done_or_stopped(runner: StudyRunner, stream=sys.stderr) -> int:
+  """Runs the study to its end (exit 0, or 1 if a run failed); on Ctrl-C or SIGTERM (which a
+  scheduler sends to this process alone) its runs on this machine are stopped with a checkpoint and
+  recorded (StudyRunner.drain), exit 130 / 143. The client, and a cluster it started, close either way."""
+  signals: list[int] = []
+
+  def on_sigterm(signum, _):
+    signals.append(signum)
+    raise KeyboardInterrupt
+
+  main = threading.current_thread() is threading.main_thread()
+  old = signal.signal(signal.SIGTERM, on_sigterm) if main else None
+  try:
+    counts = runner.run()
+  except KeyboardInterrupt:
+    print("\nstopping: the running runs save a checkpoint and come back ...", file=stream, flush=True)
+    back = runner.drain()
+    n = runner.state.counts()
+    print(f"interrupted: {n['done']} of {sum(n.values())} runs done, {back} stopped with their checkpoints; the "
+          "same command continues the study", file=stream, flush=True)
+    return 143 if signals else 130
+  finally:
+    if main:
+      signal.signal(signal.SIGTERM, old)
+    cluster = getattr(runner.client, "cluster", None)
+    runner.client.close()
+    if cluster is not None:
+      cluster.close()
+  print(f"study {runner.spec.name}: {counts['done']} runs done, {counts['failed']} failed -> {runner.folder} "
+        "(state.json)", flush=True)
+  return 0 if counts["failed"] == 0 else 1

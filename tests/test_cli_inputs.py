@@ -1,0 +1,93 @@
+"""Every command line answers bad input in one line with exit code 2 (no traceback), never
+overwrites a fuller evaluation, and stays quiet when its reader goes away."""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from train import evaluate
+from train.db import ExperimentDB
+from train.evaluate import main as evaluate_main
+from train.run import main as run_main
+from train.study.__main__ import main as study_main
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def _one_line_error(capsys, rc: int, *words: str) -> None:
+  err = capsys.readouterr().err.strip()
+  assert rc == 2 and err.startswith("error: ") and len(err.splitlines()) == 1 and "Traceback" not in err, err
+  for w in words:
+    assert w in err, err
+
+
+def test_a_corrupt_or_foreign_run_json_is_one_line(tmp_path, capsys):
+  (tmp_path / "run.json").write_text('{"run_id": "x", "task": ')
+  _one_line_error(capsys, evaluate_main([str(tmp_path)]), "not readable JSON")
+  (tmp_path / "run.json").write_text('[1, 2]')
+  _one_line_error(capsys, evaluate_main([str(tmp_path)]), "not a run's record")
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--task", "asc-inc-cog", "--steps", str(10**30)], "--steps must be from 1 to"),
+    (["--task", "asc-inc-cog", "--num-envs", str(10**12)], "--num-envs must be from 1 to"),
+    (["--task", "asc-inc-cog", "--seed", "-3"], "--seed must be from 0 to"),
+    (["--task", "asc-inc-cog", "--set", "scene.tread=[0.3"], "override scene.tread: not valid YAML"),
+])
+def test_train_run_refuses_out_of_range_numbers_and_broken_yaml_in_one_line(argv, words, tmp_path, capsys):
+  _one_line_error(capsys, run_main([*argv, "--out", str(tmp_path / "r")]), words)
+
+
+def test_train_evaluate_refuses_an_enormous_trial_count(tmp_path, capsys):
+  (tmp_path / "run.json").write_text("{}")
+  _one_line_error(capsys, evaluate_main([str(tmp_path), "--trials", str(10**9)]), "--trials must be from 1 to")
+
+
+@pytest.mark.parametrize("text, overrides, words", [
+    ("name: [unclosed", [], "not valid YAML"),
+    ("- just\n- a list", [], "top level must be a mapping"),
+    ("name: t\ntasks: [nope]\nseeds: [0]\ngroups: [{name: g, algo: ppo, preset: cpu, steps: [1]}]\n"
+     "compare: [[nope, asc-inc-cog]]", [], "unknown task 'nope'"),
+    ("name: t", ["seeds=[0"], "override seeds: not valid YAML"),
+])
+def test_study_files_and_overrides_that_do_not_parse_are_one_line(text, overrides, words, tmp_path, capsys):
+  path = tmp_path / "s.yaml"
+  path.write_text(text)
+  sets = [a for item in overrides for a in ("--set", item)]
+  _one_line_error(capsys, study_main([str(path), "--plan", *sets]), words)
+
+
+def test_an_evaluation_of_fewer_trials_never_overwrites_a_fuller_report(tmp_path, capsys):
+  db = ExperimentDB(str(tmp_path / "experiments.sqlite"))
+  db.start("r", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path / "r"), 100)
+  (tmp_path / "r").mkdir()
+  meta = {"run_id": "r", "task": "asc-inc-cog", "algo": "ppo"}
+
+  def write(trials: int) -> str:
+    args = argparse.Namespace(run_dir=str(tmp_path / "r"), trials=trials, eps=1.0, checkpoint=None, out=None,
+                              db=db.path, argv=["r", "--trials", str(trials)])
+    figures = {k: np.full(trials, 0.5) for k in ("progress", "success", "cog_deviation", "pitch_rate",
+                                                 "tipped_over", "length")}
+    return evaluate._write_report(args, meta, "hardest", None, 100, figures)
+
+  full = write(100)
+  assert full.endswith("eval-hardest.json") and len(db.eval_groups("r")[("hardest", None)]) == 100
+  small = write(1)
+  assert small.endswith("eval-hardest.1-trials.json") and "kept" in capsys.readouterr().err
+  assert json.load(open(full))["trials"] == 100 and len(db.eval_groups("r")[("hardest", None)]) == 100
+  assert write(200) == full and json.load(open(full))["trials"] == 200  # a fuller one replaces it
+
+
+def test_the_database_export_is_quiet_when_its_reader_stops(tmp_path):
+  db = ExperimentDB(str(tmp_path / "experiments.sqlite"))
+  db.start("r", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path / "r"), 100)
+  for step in range(1, 5_001):  # more than a pipe holds (64 KiB)
+    db.log_stats("r", {"step": step, "source": "train"}, {})
+  cmd = f"{sys.executable} -m train.db --db {db.path} export r --csv | head -2"
+  out = subprocess.run(["bash", "-c", cmd], capture_output=True, text=True, cwd=ROOT, timeout=120)
+  assert len(out.stdout.splitlines()) == 2 and "Error" not in out.stderr, out.stderr
