@@ -28,7 +28,8 @@ def _times_path() -> pathlib.Path:
 
 
 def last_compile_seconds(what: str) -> float | None:
-  """How long `what` (e.g. 'ppo/gpu/4096 envs on cuda') took to compile here last time, if known."""
+  """The longest `what` (e.g. 'ppo/gpu/4096 envs on cuda') took to compile here, if known: a cold
+  compilation, which is what a run must be ready for (a warm cache only makes it shorter)."""
   try:
     return float(json.loads(_times_path().read_text())[what])
   except (OSError, ValueError, KeyError, TypeError):
@@ -36,11 +37,12 @@ def last_compile_seconds(what: str) -> float | None:
 
 
 def record_compile_seconds(what: str, seconds: float) -> None:
-  """Remembers a compilation time (for the next run's estimate); never fails the caller."""
+  """Remembers a compilation time if it is the longest yet (for the next run's estimate: a partial
+  cache hit must not teach a short one); never fails the caller."""
   try:
     path = _times_path()
     times = json.loads(path.read_text()) if path.exists() else {}
-    times[what] = round(seconds, 1)
+    times[what] = round(max(seconds, float(times.get(what, 0.0))), 1)
     tmp = path.with_suffix(f".{os.getpid()}.tmp")
     tmp.write_text(json.dumps(times, indent=1))
     os.replace(tmp, path)

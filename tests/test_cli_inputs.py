@@ -86,8 +86,17 @@ def test_an_evaluation_of_fewer_trials_never_overwrites_a_fuller_report(tmp_path
 def test_the_database_export_is_quiet_when_its_reader_stops(tmp_path):
   db = ExperimentDB(str(tmp_path / "experiments.sqlite"))
   db.start("r", "asc-inc-cog", "ppo", "cpu", 0, {}, str(tmp_path / "r"), 100)
-  for step in range(1, 5_001):  # more than a pipe holds (64 KiB)
+  for step in range(1, 2_501):  # more than a pipe holds (64 KiB)
     db.log_stats("r", {"step": step, "source": "train"}, {})
   cmd = f"{sys.executable} -m train.db --db {db.path} export r --csv | head -2"
   out = subprocess.run(["bash", "-c", cmd], capture_output=True, text=True, cwd=ROOT, timeout=120)
   assert len(out.stdout.splitlines()) == 2 and "Error" not in out.stderr, out.stderr
+
+
+def test_the_compile_estimate_is_the_longest_compilation_seen(tmp_path, monkeypatch):
+  """A partial cache hit (11 s) after a cold compile (42 s) must not make the next estimate 11 s."""
+  from mjx_tracks import compile_cache
+  monkeypatch.setattr(compile_cache, "cache_dir", lambda: tmp_path)
+  for seconds in (42.0, 11.0, 3.0):
+    compile_cache.record_compile_seconds("ppo/cpu", seconds)
+  assert compile_cache.last_compile_seconds("ppo/cpu") == 42.0

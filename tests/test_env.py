@@ -204,8 +204,10 @@ def test_observation_parts_read_their_sources():
   assert (part["vertical_beams"] > 0).any()  # the camera sees the floor and the first step
 
 
-def test_gymnasium_checker_passes_and_vector_env_steps():
-  env = gym.make("mjx_tracks/asc-inc-cog-v0", render_mode="rgb_array")
+def test_gymnasium_checker_passes_and_vector_env_steps(capsys):
+  env = gym.make("mjx_tracks/asc-inc-cog-v0", render_mode="rgb_array")  # this file's first Gymnasium env
+  said = capsys.readouterr().err
+  assert "compiling asc-inc-cog for 1 robot(s)" in said and "compiled in" in said  # not a silent minute
   check_env(env.unwrapped, skip_render_check=False)
   env.reset(seed=3)
   frame = env.render()

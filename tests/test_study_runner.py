@@ -81,7 +81,8 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
     assert any(" 1 running" in line or " 2 running" in line for line in progress)
     lines = summary(folder, runs=True)
     attempts, retried = sum(len(c["attempts"]) for c in state.values()), sum(len(c["attempts"]) > 1 for c in state.values())
-    assert lines[0] == f"study study: 4 runs: 4 done, 0 failed, 0 not finished; {attempts} attempts, {retried} runs retried"
+    assert lines[0] == (f"study study: 4 runs: 4 done, 0 failed, 0 not finished (0 submitted: running or waiting for "
+                        f"a slot); {attempts} attempts, {retried} runs retried")
     assert attempts >= 7 and retried >= 3  # the killed run and the two crashed ones
     assert any(line.startswith(SLOW) and " done " in line and line.endswith("1.00") for line in lines[2:])
     db_attempts = ExperimentDB(os.path.join(folder, STUDY_DB)).attempts(spec.name)
@@ -201,3 +202,15 @@ def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_not
   (cell,) = cells(study_from_dict(study))
   assert os.listdir(os.path.join(cell_folder(folder, cell), "checkpoints"))  # came back: the next start resumes
   assert not list(scratch.glob("study-cell-*"))
+
+
+def test_status_says_submitted_not_running_for_runs_handed_to_the_cluster(tmp_path):
+  """state.json's "running" is any run handed to the cluster, with one slot or many: the status
+  command cannot tell running from waiting, and says so."""
+  folder = tmp_path / "s"
+  folder.mkdir()
+  cells_ = {f"g/t/1/s{i}": {"status": "running", "attempts": [{"started": 1.0}]} for i in range(4)}
+  json.dump({"cells": cells_}, open(folder / "state.json", "w"))
+  lines = summary(str(folder), runs=True)
+  assert "4 not finished (4 submitted: running or waiting for a slot)" in lines[0]
+  assert all(" submitted " in line and " running " not in line for line in lines[2:])

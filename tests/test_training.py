@@ -1,6 +1,8 @@
 """Training end to end on the CPU: a tiny PPO run, resume, export -> load -> act, evaluation
 report, experiment database, bad input (SAC: test_training_sac.py)."""
 
+import contextlib
+import io
 import glob
 import json
 import multiprocessing
@@ -24,11 +26,23 @@ HELD_OUT = "middle"  # the fixture's one held-out staircase
 def ppo_run(tmp_path_factory):
   root = tmp_path_factory.mktemp("runs")
   out, database = str(root / "ppo"), str(root / "db.sqlite")
-  rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", out,
-                 "--db", database, "--probe-every", "2048", "--milestones", "1024", *TINY,
-                 "--set", f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"])
+  with contextlib.redirect_stdout(io.StringIO()) as said:
+    rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", out,
+                   "--db", database, "--probe-every", "2048", "--milestones", "1024", *TINY,
+                   "--set", f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"])
   assert rc == 0
+  with open(out + ".stdout", "w") as f:  # what the command printed, for the test of its last lines
+    f.write(said.getvalue())
   return out, database
+
+
+def test_the_main_command_ends_saying_what_it_made_and_what_to_run_next(ppo_run):
+  out, database = ppo_run
+  said = open(out + ".stdout").read()
+  tail = said[said.index("\ndone: 2,048 steps"):]
+  assert f"made: {out}/policy" in tail and database in tail
+  assert f"python -m train.evaluate {out} --scene hardest" in tail and "python -m train.server" in tail
+  assert f"load_policy('{out}/policy')" in tail and '"reason"' not in said  # no JSON blob
 
 
 def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):

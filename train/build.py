@@ -78,17 +78,16 @@ def compile_update(t: Training, stream=sys.stdout):
   what = (f"{t.plan.task}/{config}/{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/"
           f"{t.mesh.devices.size} x {jax.default_backend()}")
   last = compile_cache.last_compile_seconds(what)
-  guess = f"~{last:,.0f} s" if last is not None else "a minute or more"
-  print(f"compiling the training step (first run on this machine takes {guess}; "
-        "later ones read the compilation cache) ...", file=stream, flush=True)
+  guess = f"up to ~{last:,.0f} s" if last is not None else "a minute or more the first time"
+  print(f"compiling the training step ({guess}; the compilation cache makes later runs faster) ...",
+        file=stream, flush=True)
   t0 = time.time()
   shaped = shaped_state(t)
   jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,),
                    out_shardings=(t.shardings, replicated(t.mesh)), donate_argnums=0)
   compiled = jitted.lower(shaped).compile()
   seconds = time.time() - t0
-  if last is None or seconds > 5:  # a cache hit would teach a misleading estimate
-    compile_cache.record_compile_seconds(what, seconds)
+  compile_cache.record_compile_seconds(what, seconds)  # kept only if the longest yet
   print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)
   return compiled
 

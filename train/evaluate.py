@@ -261,6 +261,9 @@ def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: Tas
   trials; returns the summary lines."""
   cfg = scene_config(cfg0, scene)
   policies = {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}
+  print(f"{scene}: compiling and running {args.trials} trials of up to {cfg.episode.max_steps} steps "
+        f"({len(budgets)} polic{'y' if len(budgets) == 1 else 'ies'}; the first time on this machine takes "
+        "a minute or more) ...", file=sys.stderr, flush=True)
   run = trial_runner(cfg, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video))
   lines = []
   for budget, (_, params, policy_step) in policies.items():

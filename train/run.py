@@ -16,7 +16,6 @@ at once. Several GPUs are used as one device mesh; see the README for several pr
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 
@@ -106,8 +105,25 @@ def _train(plan: RunPlan, args) -> int:
     print(f"interrupted at step {final['step']:,}: checkpoint and policy saved; continue with: "
           f"python -m train.run --resume {plan.out_dir}", file=sys.stderr, flush=True)
     return stop.exit_code
-  print(json.dumps(final, indent=1))
+  print(finished_lines(plan, final, getattr(db, "path", None)), flush=True)
   return 0
+
+
+def finished_lines(plan: RunPlan, final: dict, db_path: str | None) -> str:
+  """What a finished run made and the three commands a user runs next."""
+  out = plan.out_dir
+  figures = ", ".join(f"{name} {final[key]:.2f}" for key, name in (
+      ("return_mean", "return"), ("progress_mean", "progress"), ("success_rate", "success"),
+      ("tipped_rate", "tip-overs")) if isinstance(final.get(key), (int, float)))
+  why = {"done": "", "early_stop": f" (early stop: {plan.early_stop})"}.get(final["reason"], "")
+  return "\n".join([
+      f"done{why}: {final['step']:,} steps in {final.get('wall_s', 0):,.0f} s; last training episodes: {figures}",
+      f"made: {out}/policy (the exported policy), {out}/checkpoints, {out}/run.json, {out}/tb (TensorBoard)"
+      + (f"; records in {db_path}" if db_path else ""),
+      "next:",
+      f"  python -m train.evaluate {out} --scene hardest --trials 10   # the policy on the task's hardest scene",
+      f"  python -m train.server --runs {os.path.dirname(out)}   # the dashboard, http://127.0.0.1:8000",
+      f"  python -c \"from train.policy import load_policy; act = load_policy('{out}/policy')\"   # act(obs) in Python"])
 
 
 def _detail(status: str, stop, plan: RunPlan) -> str:

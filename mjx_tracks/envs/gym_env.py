@@ -11,6 +11,8 @@ info["final_obs"]).
 from __future__ import annotations
 
 import functools
+import sys
+import time
 from typing import Any, Sequence
 
 import gymnasium as gym
@@ -20,6 +22,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from mjx_tracks import compile_cache
 from mjx_tracks.envs.registry import load
 from mjx_tracks.envs.wrappers import GlobalStats, batched_env
 
@@ -46,6 +49,20 @@ class _Stack:
     self.reset_with = jax.jit(self.env.reset_with)
     self.step = jax.jit(self.env.step)
     self.initial = self.env.initial_stats()
+    self._compile(task)
+
+  def _compile(self, task: str) -> None:
+    """Compiles reset and step now, saying so (the first time on a machine: a minute or more,
+    which a first reset() would otherwise spend in silence); uses the persistent compilation
+    cache unless the caller set up JAX's own."""
+    if jax.config.jax_compilation_cache_dir is None:
+      compile_cache.enable()
+    print(f"mjx-tracks: compiling {task} for {self.n} robot(s) (a minute or more the first time on this machine; "
+          f"cached in {jax.config.jax_compilation_cache_dir}) ...", file=sys.stderr, flush=True)
+    t0 = time.time()
+    state = self.reset(0, self.initial)
+    jax.block_until_ready(self.step(state, jnp.zeros((self.n, self.core.action_size), jnp.float32)))
+    print(f"mjx-tracks: compiled in {time.time() - t0:,.0f} s", file=sys.stderr, flush=True)
 
   def reset(self, seed: int, glob: GlobalStats):
     return self.reset_with(jax.random.split(jax.random.PRNGKey(seed), self.n), glob)

@@ -63,8 +63,8 @@ def overview(cells: dict) -> str:
   """'N runs: D done, F failed, U not finished; A attempts'."""
   n = status_counts(cells)
   attempts = sum(len(c["attempts"]) for c in cells.values())
-  return (f"{len(cells)} runs: {n['done']} done, {n['failed']} failed, {n['running'] + n['queued']} not finished; "
-          f"{attempts} attempts")
+  return (f"{len(cells)} runs: {n['done']} done, {n['failed']} failed, {n['running'] + n['queued']} not finished "
+          f"({n['running']} submitted: running or waiting for a slot); {attempts} attempts")
 
 
 @dataclasses.dataclass

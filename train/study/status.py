@@ -12,6 +12,11 @@ import sys
 from train.study.executor import cell_folder_of, overview, read_cells
 
 
+# state.json's "running" means handed to the cluster: running, or waiting there for a slot (the
+# folder alone cannot tell which; the study's own progress lines ask the scheduler)
+SHOWN = {"running": "submitted", "queued": "to retry"}
+
+
 def _success(run_folder: str) -> str:
   path = os.path.join(run_folder, "eval-hardest.json")
   if not os.path.exists(path):
@@ -25,10 +30,11 @@ def summary(folder: str, runs: bool = False) -> list[str]:
   retried = sum(1 for c in state.values() if len(c["attempts"]) > 1)
   lines = [f"study {os.path.basename(folder)}: {overview(state)}, {retried} runs retried"]
   if runs:
-    lines.append(f"{'run':<44} {'status':<8} {'attempts':>8}  {'last worker':<12} success (hardest)")
+    lines.append(f"{'run':<44} {'status':<10} {'attempts':>8}  {'last worker':<12} success (hardest)")
     for cid, c in state.items():
       last = c["attempts"][-1] if c["attempts"] else {}
-      lines.append(f"{cid:<44} {c['status']:<8} {len(c['attempts']):>8}  {str(last.get('worker') or '-'):<12} "
+      shown = SHOWN.get(c["status"], c["status"])
+      lines.append(f"{cid:<44} {shown:<10} {len(c['attempts']):>8}  {str(last.get('worker') or '-'):<12} "
                    f"{_success(cell_folder_of(folder, cid))}")
   return lines
 
