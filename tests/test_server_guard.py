@@ -102,6 +102,7 @@ def test_the_token_comes_from_a_private_file_or_the_environment_never_the_comman
     read_token(None)
   assert server_main(["--token", TOKEN]) == 2
   assert "--token-file" in capsys.readouterr().err
+  assert server_main(["--port", "99999"]) == 2 and "--port must be" in capsys.readouterr().err
 
 
 def test_without_a_token_only_loopback_names_and_same_site_posts_are_answered(settings):
@@ -174,3 +175,18 @@ def test_files_are_served_only_from_inside_the_runs_folder_and_errors_name_no_pa
   for path in ("/api/runs/a/videos/other.mp4", "/api/runs/b/policy"):
     r = client.get(path)
     assert r.status_code == 403 and str(tmp_path) not in r.text, r.text
+
+
+@pytest.mark.parametrize("yaml_text, phrase", [
+    ("- a\n- list", "top level must be a mapping"),
+    ("name: " + "[" * 5_000 + "]" * 5_000, "nested too deeply"),
+    ("name: " + "x" * 300 + "\ntasks: [asc-inc-cog]\nseeds: [0]\ngroups: [{name: g, algo: ppo, preset: cpu, steps: [1]}]",
+     "at most 64 characters"),
+    ('name: "t\\n"\ntasks: [asc-inc-cog]\nseeds: [0]\ngroups: [{name: g, algo: ppo, preset: cpu, steps: [1]}]',
+     "not a plain name"),
+])
+def test_bad_studies_through_the_api_are_422_naming_the_fault(settings, yaml_text, phrase):
+  client = TestClient(create_app(settings, launcher=object()), base_url=LOCAL)  # refused before any queueing
+  r = client.post("/api/studies", json={"yaml": yaml_text})
+  assert r.status_code == 422 and phrase in r.json()["detail"][0]["msg"], r.json()
+  assert client.get("/api/launches").json() == []

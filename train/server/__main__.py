@@ -30,6 +30,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"error: --token would show the token to every user of this machine (ps, /proc); put it in a file "
           f"(chmod 600) and pass --token-file FILE, or set ${TOKEN_ENV}", file=sys.stderr)
     return 2
+  if not 1 <= args.port <= 65535:
+    print(f"error: --port must be from 1 to 65535, got {args.port}", file=sys.stderr)
+    return 2
   try:
     token = read_token(args.token_file)
     check_bind(args.host, token)

@@ -206,7 +206,7 @@ class StudyRunner:
         time.sleep(0.2)
         continue
       for future in batch:
-        cid = future.key.rsplit("/attempt-", 1)[0]
+        cid = _cell_of(future)
         if self._settle(cid, future):
           submitted.append(self._submit(cid))
           pending.add(submitted[-1])
@@ -230,17 +230,25 @@ class StudyRunner:
         pass
     psutil.wait_procs(procs, timeout=timeout_s)
     back, t_end = 0, time.time() + 30  # the workers pack each run folder and return it
-    for future in [f for f in self.submitted if self.state.cells[f.key.rsplit("/attempt-", 1)[0]]["status"] == "running"]:
+    latest = {_cell_of(f): f for f in self.submitted}  # each cell's last attempt
+    for cid, future in latest.items():
+      if self.state.cells[cid]["status"] != "running":
+        continue  # settled already
       try:
         future.result(timeout=max(t_end - time.time(), 0.1))
-      except Exception:  # noqa: BLE001  (not back in time, or lost: recorded as such below)
+      except Exception:  # noqa: BLE001  (not back in time, or lost: the next start records it as stopped)
         pass
       if future.done():
-        self._settle(future.key.rsplit("/attempt-", 1)[0], future, stopped=True)
+        self._settle(cid, future, stopped=True)
         back += 1
     self.client.cancel([f for f in self.submitted if not f.done()])
     self.state.save()
     return back
+
+
+def _cell_of(future) -> str:
+  """The cell id of an attempt's future (its key is CELL/attempt-N)."""
+  return future.key.rsplit("/attempt-", 1)[0]
 
 
 def run_processes(commands) -> list:
