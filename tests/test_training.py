@@ -40,7 +40,7 @@ def test_the_main_command_ends_saying_what_it_made_and_what_to_run_next(ppo_run)
   out, database = ppo_run
   said = open(out + ".stdout").read()
   tail = said[said.index("\ndone: 2,048 steps"):]
-  assert f"made: {out}/policy" in tail and database in tail
+  assert f"made: {out}/ with policy/" in tail and database in tail
   assert f"python -m train.evaluate {out} --scene hardest" in tail and "python -m train.server" in tail
   assert f"load_policy('{out}/policy')" in tail and '"reason"' not in said  # no JSON blob
 
@@ -80,7 +80,7 @@ def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
   assert a.shape == (5, env.action_size) and np.abs(a).max() <= 1.0
 
 
-def test_resume_continues_from_the_saved_step_and_curriculum(ppo_run, tmp_path):
+def test_resume_continues_from_the_saved_step_and_curriculum(ppo_run, tmp_path, capsys):
   out, database = ppo_run
   copy = str(tmp_path / "resumed")
   shutil.copytree(out, copy)
@@ -88,6 +88,7 @@ def test_resume_continues_from_the_saved_step_and_curriculum(ppo_run, tmp_path):
   before_step = ck.latest_step()
   _, before = ck.restore()
   assert run.main(["--resume", copy, "--steps", str(before_step + 1024), "--db", database]) == 0
+  assert f"from its checkpoint at step {before_step:,} ({copy}/checkpoints/{before_step})" in capsys.readouterr().out
   ck = RunCheckpoints(copy)
   assert ck.latest_step() > before_step
   _, after = ck.restore()
@@ -272,6 +273,18 @@ def test_db_cli_lists_with_a_header_and_takes_run_directories(ppo_run, capsys):
   assert run_id(out) in shown and "event" in shown and "checkpoint" in shown
   assert dbmod.main(["--db", database, "export", out, "--csv"]) == 0
   assert capsys.readouterr().out.startswith("step,wall_s")
+
+
+def test_the_cpu_default_is_the_preset_that_solves_the_flagship_task():
+  """Without --preset, a PPO run on the CPU gets `laptop` (measured: results/first_run/), SAC the
+  small `cpu`; each default exists."""
+  from train.plan import default_preset
+  from train.presets import get_preset
+  assert jax.default_backend() == "cpu"
+  assert default_preset("ppo") == "laptop" and default_preset("sac") == "cpu"
+  p = get_preset("ppo", "laptop")
+  assert p.num_timesteps % (p.batch_size * p.num_minibatches * p.unroll_length) == 0  # whole updates
+  assert get_preset("sac", default_preset("sac")).num_envs >= 1
 
 
 def test_run_ids_started_in_the_same_second_differ():

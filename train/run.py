@@ -118,7 +118,7 @@ def finished_lines(plan: RunPlan, final: dict, db_path: str | None) -> str:
   why = {"done": "", "early_stop": f" (early stop: {plan.early_stop})"}.get(final["reason"], "")
   return "\n".join([
       f"done{why}: {final['step']:,} steps in {final.get('wall_s', 0):,.0f} s; last training episodes: {figures}",
-      f"made: {out}/policy (the exported policy), {out}/checkpoints, {out}/run.json, {out}/tb (TensorBoard)"
+      f"made: {out}/ with policy/ (the exported policy), checkpoints/, run.json, tb/ (TensorBoard)"
       + (f"; records in {db_path}" if db_path else ""),
       "next:",
       f"  python -m train.evaluate {out} --scene hardest --trials 10   # the policy on the task's hardest scene",
