@@ -167,7 +167,7 @@ def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path,
   assert run.main(["--task", "defaults", "--out", str(tmp_path / "x")]) == 2
   assert "unknown task 'defaults'" in capsys.readouterr().err
   assert run.main(["--task", "asc-inc-cog", "--steps", "0", "--out", str(tmp_path / "x")]) == 2
-  assert "--steps must be >= 1" in capsys.readouterr().err
+  assert "--steps must be from 1 to" in capsys.readouterr().err
   assert not os.path.exists(str(tmp_path / "x"))
   assert run.main(["--task", "asc-inc-cog", "--set", "reward.cog_scal=1", "--out", str(tmp_path / "y")]) == 2
   assert "reward.cog_scal: unknown key" in capsys.readouterr().err
