@@ -10,9 +10,10 @@ import hmac
 import http.cookies
 import os
 
+from train.study.cluster import LOOPBACK  # the addresses that stay on this machine (one definition)
+
 TOKEN_ENV = "MJX_TRACKS_TOKEN"  # the environment variable `python -m train.server` reads the token from
 COOKIE = "mjx_tracks_token"  # the browser's copy of the token
-LOOPBACK = ("127.0.0.1", "localhost", "::1")  # addresses that may be served without a token
 MIN_TOKEN_CHARS = 16  # shorter tokens are refused at start (guessable)
 
 

@@ -14,7 +14,8 @@ import pathlib
 import urllib.parse
 
 from mjx_tracks.limits import MAX_BODY_BYTES
-from train.server.auth import LOOPBACK, cookie_header, header_or_cookie_token, token_matches
+from train.server.auth import cookie_header, header_or_cookie_token, token_matches
+from train.study.cluster import LOOPBACK
 
 UNSAFE = {"POST", "PUT", "PATCH", "DELETE"}
 PUBLIC = ("/static/",)  # the pages' scripts and style: no data in them

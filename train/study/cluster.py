@@ -17,7 +17,8 @@ import urllib.parse
 
 QUIET = {"DASK_LOGGING__DISTRIBUTED": "error"}  # workers log errors only (the study prints progress)
 LOOPBACK_HOST = "127.0.0.1"  # where the local cluster's endpoints listen
-LOOPBACK = ("127.0.0.1", "localhost", "::1")  # host names a cluster address may have without TLS
+LOOPBACK = ("127.0.0.1", "localhost", "::1")  # host names that stay on this machine: a cluster address
+# without TLS, a server without a token (train.server.auth)
 
 
 def local_gpus() -> list[str]:
