@@ -37,6 +37,7 @@ WALL_THICKNESS = 0.3  # m, zigzag walls
 OBSTACLE_HEIGHT = 1.0  # m
 FLOOR_X, FLOOR_Y, FLOOR_SIDE = (START_X + 0.5, GOAL_X - 0.5), (-AREA_W / 2 + 0.5, AREA_W / 2 - 0.5), (0.3, 0.8)  # m
 MAX_FLOOR_OBSTACLES = 12
+NAV_AREAS = ("hallway", "zigzag")  # the area kinds (scene.nav_kinds)
 UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
               integer=(False,) * 5, hard=("high", "high", "high", "high", "low"))
 # hardest: obstacles jutting furthest and longest, the narrowest gap C
@@ -59,8 +60,8 @@ class NavScene:
   floor_height: tuple[float, float]  # m, their height ~ U(min, max)
 
   def __post_init__(self):
-    if not self.kinds or any(k not in ("hallway", "zigzag") for k in self.kinds):
-      raise ValueError(f"nav kinds must be a non-empty subset of ('hallway', 'zigzag'), got {self.kinds}")
+    if not self.kinds or any(k not in NAV_AREAS for k in self.kinds):
+      raise ValueError(f"nav kinds must be a non-empty subset of {NAV_AREAS}, got {self.kinds}")
     if not 0 <= self.floor_obstacles <= MAX_FLOOR_OBSTACLES:
       raise ValueError(f"floor obstacles must number 0..{MAX_FLOOR_OBSTACLES}, got {self.floor_obstacles}")
 

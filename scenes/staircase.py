@@ -20,7 +20,7 @@ from flax import struct
 from scenes import samplers
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
-from scenes.terrain_kinds import MAX_STEPS, RISER_LIMITS, TREAD_LIMITS
+from scenes.terrain_kinds import MAX_STEPS, STAIRS
 from scenes.world import SCENE_BOX, world_geom_attrs
 
 N_MAX = 7  # the reference's n_max: the paper's longest staircase (the default pool)
@@ -121,9 +121,9 @@ def descent_spawn(stairs: Staircase) -> tuple[jax.Array, jax.Array]:
   return pos, z + jnp.pi
 
 
-STAIR_PARAMS = ("tread", "riser", "steps")  # xi = (l m, h m, n)
-STAIR_HARD = ("low", "high", "high")  # hardest: short treads, tall risers, many steps
-STAIR_LIMITS = (TREAD_LIMITS, RISER_LIMITS, (1, MAX_STEPS))  # what the generator supports (m, m, count)
+STAIR_PARAMS = STAIRS.names  # xi = (l m, h m, n)
+STAIR_HARD = STAIRS.hard  # hardest: short treads, tall risers, many steps
+STAIR_LIMITS = STAIRS.limits  # what the generator supports (m, m, count)
 
 
 def stair_ranges(tread: tuple[float, float], riser: tuple[float, float],

@@ -1,5 +1,6 @@
-"""The terrain kinds' parameters (scenes.terrain lays them out): names, hard ends, what the
-generator supports and which are integers. Task configs name their ranges by these."""
+"""The scene parameters of every layout: the straight staircase's and each terrain kind's (scenes.terrain
+lays those out): names, units, hard ends, what the generator supports and which are integers. Task
+configs name their ranges by these; their default ranges are in configs/defaults.yaml."""
 
 from __future__ import annotations
 
@@ -20,11 +21,18 @@ class TerrainParams:
   integer: tuple[bool, ...]
   corridor: bool = True  # laid out in the 2 m corridor between side walls (else open, no walls)
   check: Callable[[tuple[float, ...]], str] = lambda xi: ""  # what is wrong with a parameter set ("": fine)
+  units: tuple[str, ...] = ()  # of each parameter: "m", "rad" or "" (a count); () for all "m"
+
+  def unit(self, name: str) -> str:
+    return self.units[self.names.index(name)] if self.units else "m"
 
 
+STAIRS = TerrainParams(("tread", "riser", "steps"), ("low", "high", "high"),  # hardest: short, tall, many
+                       (TREAD_LIMITS, RISER_LIMITS, (1, MAX_STEPS)), (False, False, True), units=("m", "m", ""))
 _STEP = TerrainParams(("height",), ("high",), ((0.01, 0.6),), (False,))  # m
 _LANDING = TerrainParams(("tread", "riser", "steps", "landing"), ("low", "high", "high", "low"),
-                         (TREAD_LIMITS, RISER_LIMITS, (3, MAX_STEPS), (0.3, 3.0)), (False, False, True, False))
+                         (TREAD_LIMITS, RISER_LIMITS, (3, MAX_STEPS), (0.3, 3.0)), (False, False, True, False),
+                         units=("m", "m", "", "m"))
 MAX_TURN = math.pi  # rad, the most a spiral turns before its landing: (steps - 1) angle
 
 
@@ -37,7 +45,7 @@ def _spiral_check(xi: tuple[float, ...]) -> str:
 
 _SPIRAL = TerrainParams(("radius", "angle", "riser", "steps"), ("low", "low", "high", "high"),
                         ((1.2, 20.0), (0.05, 1.0), RISER_LIMITS, (2, MAX_STEPS)), (False, False, False, True),
-                        corridor=False, check=_spiral_check)
+                        corridor=False, check=_spiral_check, units=("m", "rad", "m", ""))
 TERRAIN_PARAMS: dict[str, TerrainParams] = {
     "step_up": _STEP,
     "step_down": _STEP,

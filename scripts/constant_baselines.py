@@ -14,7 +14,7 @@ import numpy as np
 from mjx_tracks.envs.config import load_config
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from result_file import write_result
-from train.evaluate import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_config, trial_runner
+from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_config, trial_runner
 
 TASKS = ("asc-inc-cog", "asc-uni-cog", "des-inc-ang", "des-uni-ang")
 SCENES = ("hardest", "uniform")

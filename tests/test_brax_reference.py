@@ -26,7 +26,7 @@ def test_brax_wraps_its_evaluation_env_with_the_evaluation_scenes():
   from mjx_tracks.envs.config import load_config
   from mjx_tracks.envs.task_env import TrackedRobotEnv
   from mjx_tracks.envs.wrappers import wrap_for_training
-  from train.evaluate import scene_config
+  from train.evaluation import scene_config
   cfg = load_config("asc-inc-cog", ())
   train_core, eval_core = TrackedRobotEnv(cfg), TrackedRobotEnv(scene_config(cfg, "uniform"))
   wrap = wrap_for_training("i")

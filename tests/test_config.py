@@ -109,17 +109,17 @@ def test_renamed_curriculum_variants_say_their_new_names():
 
 
 def test_hardest_scene_pins_every_parameter_at_its_hard_end():
-  from train.evaluate import scene_config
+  from train.evaluation import scene_config
   s = scene_config(load_config("asc-inc-cog", ["scene.tread=[0.4, 0.5]"]), "hardest").scene
   assert (s.tread, s.riser, s.steps, s.sampler) == ((0.4, 0.4), (0.22, 0.22), (7, 7), "uniform")
-  with pytest.raises(ConfigError, match="stair and terrain tasks only"):
+  with pytest.raises(ConfigError, match="navigation tasks have no hardest"):
     scene_config(load_config("nav"), "hardest")
 
 
 def test_nav_suites_evaluate_each_area_kind_alone():
   import jax
   from mjx_tracks.envs.task_env import make_scene
-  from train.evaluate import scene_config, suite_scenes
+  from train.evaluation import scene_config, suite_scenes
   cfg = load_config("nav")
   assert suite_scenes(cfg) == ["uniform", "nav/hallway", "nav/zigzag"]
   assert suite_scenes(load_config("nav", ["scene.nav_kinds=[zigzag]"])) == ["uniform"]
@@ -129,12 +129,12 @@ def test_nav_suites_evaluate_each_area_kind_alone():
     assert (s.variant == variant).all()
   with pytest.raises(ConfigError, match=r"draws navigation areas \['zigzag'\]"):
     scene_config(load_config("nav", ["scene.nav_kinds=[zigzag]"]), "nav/hallway")
-  with pytest.raises(ConfigError, match=r"draws navigation areas \[\]"):
+  with pytest.raises(ConfigError, match=r"nav/KIND is not for stair tasks"):
     scene_config(load_config("asc-inc-cog"), "nav/hallway")
 
 
 def test_held_out_scenes_pin_their_staircase_and_bad_ones_are_named():
-  from train.evaluate import scene_config, suite_scenes
+  from train.evaluation import scene_config, suite_scenes
   cfg = load_config("asc-inc-cog", ["evaluation.held_out=[{name: low, tread: 0.5, riser: 0.12, steps: 2}]"])
   s = scene_config(cfg, "held-out/low").scene
   assert (s.tread, s.riser, s.steps, s.sampler) == ((0.5, 0.5), (0.12, 0.12), (2, 2), "uniform")

@@ -6,7 +6,8 @@ import types
 import pytest
 
 from mjx_tracks.envs.config import load_config
-from train.early_stop import EARLY_STOP_RETURN, EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, EarlyStop, parse_early_stop
+from scenes.kinds.stairs import EARLY_STOP_RETURN
+from train.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, EarlyStop, parse_early_stop
 from train.loop import Checkpointer, Loop
 
 

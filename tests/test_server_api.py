@@ -87,7 +87,10 @@ def test_configurations_are_checked_by_the_command_lines_loader_and_errors_name_
   cases = {("asc-inc-cog", "reward.cog_scal=1"): ["body", "overrides", "reward.cog_scal"],
            ("asc-inc-cog", "episode.max_steps=0"): ["body", "overrides", "episode.max_steps"],
            ("asc-inc-cog", "scene.riser=[0.3, 0.1]"): ["body", "overrides", "scene.riser"],
-           ("nope", "reward.cog_scale=1"): ["body", "task"]}
+           ("nope", "reward.cog_scale=1"): ["body", "task"],
+           ("asc-inc-cog", "robot=2"): ["body", "overrides", "control.mode"],  # the scene kinds' and robots' checks
+           ("step-up", "reward.kind=cog"): ["body", "overrides", "reward.kind"],
+           ("nav", "scene.nav_kinds=[maze]"): ["body", "overrides", "scene.nav_kinds"]}
   for (task, item), loc in cases.items():
     r = client.post("/api/validate", json={"task": task, "overrides": [item]})
     assert r.status_code == 422 and r.json()["detail"][0]["loc"] == loc, (item, r.json())

@@ -12,7 +12,7 @@ from mujoco import mjx
 from mjx_tracks.envs.config import ConfigError, load_config
 from mjx_tracks.envs.task_env import make_scene
 from scenes.terrain_kinds import TERRAIN_PARAMS
-from train.evaluate import scene_config
+from train.evaluation import scene_config
 
 XI = [(3.0, 0.2, 0.15, 6), (2.5, 0.25, 0.12, 5)]  # radius m, angle rad, riser m, steps (<= 7: the shared simulator's pool)
 

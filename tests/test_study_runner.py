@@ -193,7 +193,9 @@ def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_not
     assert time.time() < t_end and proc.poll() is None, proc.stdout.read() if proc.poll() is not None else ""
     runs = [p for p in psutil.Process(proc.pid).children(recursive=True) if FAKE in " ".join(p.cmdline())]
     time.sleep(0.2)
-  time.sleep(2.5)  # a checkpoint or two
+  while not list(scratch.glob("study-cell-*/**/checkpoints/*")):  # a checkpoint (the run has started up)
+    assert time.time() < t_end and proc.poll() is None, "no checkpoint in time"
+    time.sleep(0.2)
   proc.send_signal(signal.SIGTERM)
   assert proc.wait(90) == 143, proc.stdout.read()
   assert not [p for p in runs if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]

@@ -53,6 +53,8 @@ def test_a_run_plans_like_its_command_line(tmp_path):
     ({"groups": [{**GROUP, "budgets": "some"}]}, r"groups\[0\].budgets: one of"),
     ({"groups": [{**GROUP, "budgets": "milestones", "early_stop": "return"}]}, "an early stop would cut them short"),
     ({"compare": [["asc-inc-cog", "nav"]]}, r"compare\[0\]: two different tasks of the study"),
+    ({"groups": [{**GROUP, "set": ["robot=2"]}]}, r"on asc-inc-cog: control.mode: '5dof_stairs' drives the arm"),
+    ({"tasks": ["step-up"], "groups": [{**GROUP, "set": ["reward.kind=cog"]}]}, r"on step-up: reward.kind: 'cog' penalizes"),
 ])
 def test_bad_studies_fail_naming_the_fault(change, words):
   with pytest.raises(ConfigError, match=words):

@@ -15,7 +15,7 @@ from scenes.staircase import LANDING_LENGTH, WIDTH, world_xml
 from scenes.terrain import POOL
 from scenes.terrain_kinds import TERRAIN_PARAMS
 from scenes.world import SCENE_BOX
-from train.evaluate import scene_config, suite_scenes
+from train.evaluation import scene_config, suite_scenes
 
 KINDS = tuple(k for k, p in TERRAIN_PARAMS.items() if p.corridor)  # the mixed task draws these; spirals: test_spiral.py
 XI = {  # a few parameter sets per kind (their own units: m, or a count)

@@ -38,7 +38,7 @@ def brax_train(plan: RunPlan, progress=lambda step, metrics: None):
   from mjx_tracks.envs.wrappers import wrap_for_training  # noqa: PLC0415
   from train import brax_compat  # noqa: PLC0415
   from train.build import network_spec  # noqa: PLC0415
-  from train.evaluate import scene_config  # noqa: PLC0415
+  from train.evaluation import scene_config  # noqa: PLC0415
   brax_compat.install()
   core = TrackedRobotEnv(plan.cfg)
   eval_core = TrackedRobotEnv(scene_config(plan.cfg, "uniform"))

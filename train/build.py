@@ -19,7 +19,7 @@ from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
 from train.algos.ppo import PPO, ppo_layout
 from train.algos.sac import SAC
-from train.evaluate import scene_config
+from train.evaluation import scene_config
 from train.mesh import BATCH, ShardedStep, make_mesh, replicated, state_shardings, use_gspmd_partitioner
 from train.networks import NetworkSpec
 

@@ -22,6 +22,8 @@ import sqlite3
 import sys
 from typing import Any, Iterator
 
+from mjx_tracks.metrics import EPISODE, EPISODE_NAMES, REPORT_COLUMN
+
 DEFAULT_ROOT = "runs"
 DEFAULT_NAME = "experiments.sqlite"
 
@@ -34,8 +36,7 @@ CREATE TABLE IF NOT EXISTS experiments (
 );
 CREATE TABLE IF NOT EXISTS stats (
   run_id TEXT NOT NULL REFERENCES experiments(run_id), step INTEGER NOT NULL, wall_s REAL,
-  steps_per_s REAL, eps REAL, return_mean REAL, progress_mean REAL, cog_deviation_mean REAL,
-  pitch_rate_mean REAL, tipped_rate REAL, success_rate REAL, metrics_json TEXT, source TEXT
+  steps_per_s REAL, eps REAL, return_mean REAL, {report_columns}, metrics_json TEXT, source TEXT
 );
 CREATE INDEX IF NOT EXISTS stats_run ON stats(run_id, step);
 CREATE TABLE IF NOT EXISTS events (
@@ -44,8 +45,7 @@ CREATE TABLE IF NOT EXISTS events (
 );
 CREATE TABLE IF NOT EXISTS evals (
   run_id TEXT NOT NULL REFERENCES experiments(run_id), scene TEXT NOT NULL, trial INTEGER NOT NULL,
-  progress REAL, success INTEGER, cog_deviation REAL, pitch_rate REAL, tipped_over INTEGER,
-  length INTEGER, created TEXT, budget INTEGER
+  {trial_columns}, created TEXT, budget INTEGER
 );
 CREATE TABLE IF NOT EXISTS launches (
   id INTEGER PRIMARY KEY AUTOINCREMENT, kind TEXT NOT NULL, spec_json TEXT NOT NULL, status TEXT NOT NULL,
@@ -57,15 +57,16 @@ CREATE TABLE IF NOT EXISTS attempts (
   PRIMARY KEY (study, cell, attempt)
 );
 """
-STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", "progress_mean",
-                "cog_deviation_mean", "pitch_rate_mean", "tipped_rate", "success_rate", "source")
+SCHEMA = SCHEMA.format(  # the metric columns: mjx_tracks.metrics
+    report_columns=", ".join(f"{c} REAL" for c in REPORT_COLUMN.values()),
+    trial_columns=", ".join(f"{m.name} {'INTEGER' if m.integer else 'REAL'}" for m in EPISODE))
+STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", *REPORT_COLUMN.values(), "source")
 STAT_SOURCES = ("train", "eval", "hardest")  # training episodes, Brax's evaluator (uniform scenes), the hardest probe
 EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed", "crashed")
 # a run's final status -> the event that records it
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
                 "failed": "failed", "crashed": "crashed"}
-EVAL_COLUMNS = ("scene", "budget", "trial", "progress", "success", "cog_deviation", "pitch_rate",
-                "tipped_over", "length")  # budget: the milestone of the policy (train.run --milestones); NULL: final
+EVAL_COLUMNS = ("scene", "budget", "trial", *EPISODE_NAMES)  # budget: the milestone of the policy (train.run --milestones); NULL: final
 # columns added since databases were first written: table -> (column, type)
 ADDED_COLUMNS = {"stats": (("source", "TEXT"),), "evals": (("budget", "INTEGER"),)}
 
@@ -303,11 +304,8 @@ def default_path(out_root: str = DEFAULT_ROOT) -> str:
 
 def resolve_run(arg: str) -> str:
   """A run id, or a run directory (its run.json names the run)."""
-  meta = os.path.join(arg, "run.json")
-  if os.path.isdir(arg) and os.path.exists(meta):
-    with open(meta) as f:
-      return json.load(f)["run_id"]
-  return arg
+  from train.run_record import is_run_dir, read_run_record  # noqa: PLC0415
+  return read_run_record(arg)["run_id"] if is_run_dir(arg) else arg
 
 
 def _list(db: ExperimentDB) -> None:

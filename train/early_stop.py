@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import dataclasses
 
+from scenes.kinds import scene_kind
 from train.db import STAT_SOURCES
 
-EARLY_STOP_RETURN = {"up": 0.5, "down": 0.6}  # the paper's thresholds, by stair direction
 EARLY_STOP_SUCCESS = 0.97  # success on the hardest staircase
 # reports in a row that must meet a criterion: two probes for success, since a policy that just
 # reached 0.97 in one probe can score a few trials less in another compilation of the same trials
@@ -69,7 +69,7 @@ def parse_early_stop(text: str, cfg) -> EarlyStop:
   elif metric == "success":
     threshold = EARLY_STOP_SUCCESS
   else:
-    threshold = EARLY_STOP_RETURN.get(cfg.scene.direction if cfg.scene.kind == "stairs" else "")
+    threshold = scene_kind(cfg.scene.kind).early_stop_return(cfg.scene)
     if threshold is None:
       raise ValueError(f"--early-stop return: task {cfg.task} has no paper threshold; give return=X")
   if metric == "success" and not 0.0 <= threshold <= 1.0:

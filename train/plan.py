@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime
-import json
 import os
 import secrets
 from typing import Any
@@ -15,6 +14,7 @@ from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
 from mjx_tracks.limits import MAX_ENVS, MAX_SEED, MAX_STEPS
 from train.early_stop import EarlyStop, parse_early_stop
 from train.presets import CPU_DEFAULT, get_preset
+from train.run_record import read_run_record, run_id_in, write_run_record
 
 
 class RunError(Exception):
@@ -61,14 +61,10 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   if given:
     raise RunError(f"--resume continues a run with its own settings; drop {', '.join(given)} "
                    "(only --steps, --db, --checkpoint-every and --keep-checkpoints may be given)")
-  meta_path = os.path.join(args.resume, "run.json")
-  if not os.path.exists(meta_path):
-    raise RunError(f"--resume {args.resume}: no run.json there; not a run directory")
   try:
-    with open(meta_path) as f:
-      meta = json.load(f)
-  except json.JSONDecodeError as e:
-    raise RunError(f"--resume {args.resume}: run.json is corrupt ({e})")
+    meta = read_run_record(args.resume)
+  except (FileNotFoundError, ValueError) as e:
+    raise RunError(f"--resume {args.resume}: {e}") from None
   total = meta["total_steps"] if args.steps is None else args.steps
   if not 1 <= total <= MAX_STEPS:
     raise RunError(f"--steps must be from 1 to {MAX_STEPS:,}")
@@ -155,8 +151,8 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   run_id = new_run_id(args.task, algo, seed)
   out_dir = os.path.abspath(args.out or os.path.join("runs", run_id))
   if _primary() and os.path.exists(out_dir) and os.listdir(out_dir):  # process 0 may have begun it
-    other = os.path.join(out_dir, "run.json")
-    what = f"run {json.load(open(other))['run_id']}" if os.path.exists(other) else "other files"
+    other = run_id_in(out_dir)
+    what = f"run {other}" if other else "other files"
     raise RunError(f"{out_dir} already holds {what}; use --resume {out_dir} or another --out")
   try:
     early = parse_early_stop(args.early_stop, cfg) if args.early_stop else None
@@ -198,16 +194,11 @@ def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int
 
 def write_run_json(plan: RunPlan) -> None:
   """run.json (atomically); a resumed run keeps its creation time."""
-  os.makedirs(plan.out_dir, exist_ok=True)
-  path = os.path.join(plan.out_dir, "run.json")
   now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-  created = json.load(open(path)).get("created", now) if plan.resume and os.path.exists(path) else now
   meta = {"run_id": plan.run_id, "task": plan.task, "algo": plan.algo, "preset": plan.preset_name,
           "seed": plan.seed, "overrides": list(plan.overrides), "config": plan.cfg.to_dict(),
           "total_steps": plan.total_steps, "num_envs": plan.num_envs,
           "early_stop": str(plan.early_stop) if plan.early_stop else None, "probe_every": plan.probe_every,
-          "milestones": list(plan.milestones), "created": created}
-  tmp = path + ".tmp"
-  with open(tmp, "w") as f:
-    json.dump(meta, f, indent=1)
-  os.replace(tmp, path)
+          "milestones": list(plan.milestones),
+          "created": read_run_record(plan.out_dir).get("created", now) if plan.resume else now}
+  write_run_record(plan.out_dir, meta)

@@ -7,13 +7,12 @@ from __future__ import annotations
 import jax
 import numpy as np
 
-from train.evaluate import EVAL_EPS, EVAL_TRIALS, per_trial_figures, scene_config, trial_keys, trial_rollout
+from mjx_tracks.metrics import REPORT_COLUMN as COLUMNS  # per-trial figure -> report column
+from train.evaluation import EVAL_EPS, EVAL_TRIALS, per_trial_figures, scene_config, trial_keys, trial_rollout
 from train.mesh import to_host
 from train.policy import act_from_params
 
 PREFIX = "hardest/"  # the probe's metrics: hardest/<report column>
-COLUMNS = {"progress": "progress_mean", "success": "success_rate", "cog_deviation": "cog_deviation_mean",
-           "pitch_rate": "pitch_rate_mean", "tipped_over": "tipped_rate"}  # per-trial figure -> report column
 
 
 class HardestProbe:

@@ -8,16 +8,16 @@ from typing import Any
 
 import numpy as np
 
-from mjx_tracks.envs.episode_stats import episode_figures
-from mjx_tracks.envs.task_env import METRICS
+from mjx_tracks.metrics import REPORT_COLUMN, STEP_NAMES, episode_figures
 from train.db import STAT_SOURCES
 from train.probe import PREFIX as PROBE
 
 
 def summarize(metrics: dict[str, Any]) -> dict[str, float]:
-  """Episode figures (mjx_tracks.envs.episode_stats) from Brax's training ('episode/...') or
+  """Report columns (mjx_tracks.metrics.REPORT) from Brax's training ('episode/...') or
   evaluation ('eval/episode_...') metrics: batch means of the episode sums, so the COG deviation
-  and pitch rate are ratios of means."""
+  and pitch rate are ratios of means, and the rates (success, tip-overs) the means of the
+  episodes' 0/1 sums (an episode reaches the goal or tips over at most once: either ends it)."""
   m = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
   if any(k.startswith(PROBE) for k in m):  # already per-trial means (train.probe)
     return {k[len(PROBE):]: v for k, v in m.items() if k.startswith(PROBE)}
@@ -27,13 +27,12 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
     prefix, ret, length = "eval/episode_", m["eval/episode_reward"], m.get("eval/avg_episode_length")
   else:
     return {}
-  if any(f"{prefix}{k}" not in m for k in METRICS):
+  if any(f"{prefix}{k}" not in m for k in STEP_NAMES):
     return {"return_mean": ret}
-  fig = episode_figures({k: m[f"{prefix}{k}"] for k in METRICS}, length if length else 1.0)
-  out = {"return_mean": ret, "progress_mean": fig["progress"], "tipped_rate": m[f"{prefix}tipped_over"],
-         "success_rate": m[f"{prefix}goal_reached"], "cog_deviation_mean": fig["cog_deviation"],
-         "pitch_rate_mean": fig["pitch_rate"] if length else None}
-  return {k: float(v) for k, v in out.items() if v is not None}
+  fig = episode_figures({k: m[f"{prefix}{k}"] for k in STEP_NAMES}, length if length else 1.0)
+  fig.update(success=m[f"{prefix}goal_reached"], tipped_over=m[f"{prefix}tipped_over"])  # rates: means of 0/1 sums
+  out = {"return_mean": ret, **{c: fig[n] for n, c in REPORT_COLUMN.items() if n != "pitch_rate" or length}}
+  return {k: float(v) for k, v in out.items()}
 
 
 TRAIN, EVAL, HARDEST = STAT_SOURCES

@@ -12,7 +12,7 @@ import jax
 
 from train.build import Training, build, compile_update, init_state, make_evaluator
 from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
-from train.evaluate import milestone_folder
+from train.evaluation import milestone_folder
 from train.loop import Checkpointer, Loop, LoopResult
 from train.mesh import from_host, to_host
 from train.plan import RunError, RunPlan

@@ -24,7 +24,7 @@ from mjx_tracks.bounds import bound, violation
 from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
 from scenes.navigation import MAX_FLOOR_OBSTACLES
-from scenes.terrain_kinds import TERRAIN_PARAMS, corridor_world
+from scenes.terrain_kinds import TERRAIN_PARAMS
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
 
@@ -175,17 +175,8 @@ def _terrain_ranges_class():
 TerrainRanges = _terrain_ranges_class()
 
 
-def _validate_terrain(kinds: tuple[str, ...], ranges, key: str, terrain_task: bool) -> None:
-  """The kinds a terrain task draws, and every kind's ranges (any task's) against what its
-  generator supports."""
-  if terrain_task:
-    require(bool(kinds) and all(k in TERRAIN_PARAMS for k in kinds), f"{key}.terrains",
-            f"a terrain task needs a non-empty list of {list(TERRAIN_PARAMS)}, got {list(kinds)}")
-    require(len(set(kinds)) == len(kinds), f"{key}.terrains", f"has duplicates: {list(kinds)}")
-    try:
-      corridor_world(kinds)
-    except ValueError as e:
-      require(False, f"{key}.terrains", str(e))
+def _validate_terrain_ranges(ranges, key: str) -> None:
+  """Every terrain kind's ranges (any task's) against what its generator supports."""
   for kind, p in TERRAIN_PARAMS.items():
     r = getattr(ranges, kind)
     for name, (lo, hi) in zip(p.names, p.limits):
@@ -196,13 +187,12 @@ def _validate_terrain(kinds: tuple[str, ...], ranges, key: str, terrain_task: bo
       require(not problem, f"{key}.terrain.{kind}", f"at {list(corner)}: {problem}")
 
 
-SCENE_KINDS = ("stairs", "nav", "terrain")
 _RENAMED_VARIANTS = {"paper": "paper_literal", "original": "original_code"}
 
 
 @dataclasses.dataclass(frozen=True)
 class SceneConfig:
-  kind: str  # SCENE_KINDS
+  kind: str  # scenes.kinds.SCENE_KINDS
   direction: str  # stairs: up | down
   sampler: str  # scenes.samplers.SAMPLERS
   variant: str  # scenes.samplers.VARIANTS
@@ -221,32 +211,36 @@ class SceneConfig:
   @property
   def has_hardest(self) -> bool:
     """Whether its scenes have a hardest configuration (every parameter at its hard end)."""
-    return self.kind in ("stairs", "terrain")
+    from scenes.kinds import scene_kind  # noqa: PLC0415
+    return scene_kind(self.kind).has_hardest(self)
 
   def validate(self, key: str) -> None:
+    """The keys every kind has; the kind's own checks run in TaskConfig.validate (they may need
+    other sections)."""
+    from scenes.kinds import SCENE_KINDS  # noqa: PLC0415
     from scenes.samplers import SAMPLERS, VARIANTS  # noqa: PLC0415
-    from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
-    require(self.kind in SCENE_KINDS, f"{key}.kind", f"must be one of {SCENE_KINDS}, got {self.kind!r}")
-    _validate_terrain(self.terrains, self.terrain, key, self.kind == "terrain")
-    in_the_open = self.kind == "terrain" and not corridor_world(self.terrains)
-    for field in ("random_spawn", "random_goal"):
-      require(not (in_the_open and getattr(self, field)), f"{key}.{field}",
-              f"not supported by {list(self.terrains)}: spawns and goals lie on the stairs' centre line")
+    from scenes.terrain_kinds import STAIRS  # noqa: PLC0415
+    require(self.kind in SCENE_KINDS, f"{key}.kind", f"must be one of {list(SCENE_KINDS)}, got {self.kind!r}")
+    _validate_terrain_ranges(self.terrain, key)
     lo, hi = self.nav_floor_height
     require(0.01 <= lo <= hi <= 0.5, f"{key}.nav_floor_height", f"needs 0.01 <= min <= max <= 0.5, got {[lo, hi]}")
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
     require(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
     hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
     require(self.variant in VARIANTS, f"{key}.variant", f"must be one of {VARIANTS}, got {self.variant!r}{hint}")
-    for name, (lo, hi) in zip(STAIR_PARAMS, STAIR_LIMITS):
+    for name, (lo, hi) in zip(STAIRS.names, STAIRS.limits):
       r = getattr(self, name)
       require(lo <= r[0] <= r[1] <= hi, f"{key}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(r)}")
     self.curriculum.validate(f"{key}.curriculum")
 
 
+# each reward kind -> the safety signal (a per-step metric) its penalty reads; a scene kind must measure it
+REWARD_SIGNALS = {"free": None, "cog": "cog_deviation", "angular": "pitch_rate"}
+
+
 @dataclasses.dataclass(frozen=True)
 class RewardConfig:
-  kind: str  # free | cog | angular
+  kind: str  # REWARD_SIGNALS
   progress_scale: float = dataclasses.field(metadata=bound(0.0))
   cog_scale: float = dataclasses.field(metadata=bound(0.0))  # per-step COG deviation penalty weight (1/m)
   angular_scale: float = dataclasses.field(metadata=bound(0.0))  # per-step |pitch rate| penalty weight (s/rad)
@@ -256,7 +250,7 @@ class RewardConfig:
   safety_window: int = dataclasses.field(metadata=bound(1))  # samples averaged by the penalty
 
   def validate(self, key: str) -> None:
-    require(self.kind in ("free", "cog", "angular"), f"{key}.kind", "must be 'free', 'cog' or 'angular'")
+    require(self.kind in REWARD_SIGNALS, f"{key}.kind", lambda: f"must be one of {list(REWARD_SIGNALS)}, got {show(self.kind)}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -278,9 +272,9 @@ class HeldOutScene:
   steps: int  # n
 
   def validate(self, key: str) -> None:
-    from scenes.staircase import STAIR_LIMITS, STAIR_PARAMS  # noqa: PLC0415
+    from scenes.terrain_kinds import STAIRS  # noqa: PLC0415
     require_plain_name(self.name, f"{key}.name")
-    for name, (lo, hi) in zip(STAIR_PARAMS, STAIR_LIMITS):
+    for name, (lo, hi) in zip(STAIRS.names, STAIRS.limits):
       require(lo <= getattr(self, name) <= hi, f"{key}.{name}", f"must be in [{lo}, {hi}], got {getattr(self, name)}")
 
 
@@ -331,7 +325,10 @@ class TaskConfig:
   evaluation: EvaluationConfig
 
   def validate(self, key: str = "") -> None:
+    """Every section, then what needs several: the robot's joints, the scene kind's own checks
+    (scenes.kinds), the reward's safety signal, the control period."""
     from mjx_tracks.robots import ROBOTS  # noqa: PLC0415
+    from scenes.kinds import scene_kind  # noqa: PLC0415
     require(str(self.robot) in ROBOTS, "robot", f"must be one of {sorted(ROBOTS)}, got {self.robot!r}")
     for f in dataclasses.fields(self):
       v = getattr(self, f.name)
@@ -342,17 +339,35 @@ class TaskConfig:
           raise
         except ValueError as e:
           raise ConfigError(str(e)) from e
-    if self.scene.kind == "nav":
-      from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
-      require("w" in CONTROL_MODES[self.control.mode], "control.mode",
-             "navigation needs a mode with angular velocity w")
-    require(not self.evaluation.held_out or self.scene.kind == "stairs", "evaluation.held_out",
-            "held-out staircases need a stair task")
+    _validate_robot(self)
+    kind = scene_kind(self.scene.kind)
+    kind.validate(self)
+    signal = REWARD_SIGNALS[self.reward.kind]
+    require(signal is None or signal in kind.signals, "reward.kind",
+            lambda: f"{self.reward.kind!r} penalizes {signal}, which {self.scene.kind} scenes do not measure "
+                    f"(they measure {list(kind.signals)}); use one of "
+                    f"{[k for k, s in REWARD_SIGNALS.items() if s is None or s in kind.signals]}")
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
 
   def to_dict(self) -> dict:
     return _to_plain(dataclasses.asdict(self))
+
+
+def _validate_robot(cfg: TaskConfig) -> None:
+  """The control mode and observation against the robot's joints and speed."""
+  from mjx_tracks.robots import get_robot  # noqa: PLC0415
+  from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
+  robot = get_robot(cfg.robot)
+  arm_dims = [d for d in CONTROL_MODES[cfg.control.mode] if d.startswith("arm")]
+  require(robot.has_arm or not arm_dims, "control.mode",
+          lambda: f"{cfg.control.mode!r} drives the arm ({arm_dims}), but robot {cfg.robot} ({robot.name}) has none; "
+                  f"use one of {sorted(m for m, d in CONTROL_MODES.items() if not any(x.startswith('arm') for x in d))}")
+  require(robot.has_arm or "arm" not in cfg.observation.parts, "observation.parts",
+          lambda: f"'arm' needs a robot with an arm; robot {cfg.robot} ({robot.name}) has none")
+  lo, hi = cfg.control.v_range
+  require(-robot.max_speed <= lo < hi <= robot.max_speed, "control.v_range",
+          lambda: f"must lie inside +-{robot.max_speed} m/s for robot {cfg.robot}, got {[lo, hi]}")
 
 
 def _to_plain(x):

@@ -8,8 +8,6 @@ sampler at difficulty eps; `reset_at(key, eps, penalty_k)` is what the curriculu
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 from brax.envs.base import Env, State
@@ -19,8 +17,8 @@ from mujoco import mjx
 from mjx_tracks.envs.beams import BeamLayout, depth_beams
 from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig
 from mjx_tracks.envs.observations import Sensors, observe, part_sizes
-from mjx_tracks.envs.rewards import (REWARD_TERMS, Monitor, cog_deviation, goal_distance, normalizer_init,
-                                     on_stairs)
+from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, normalizer_init, on_stairs
+from mjx_tracks.metrics import STEP_NAMES as METRICS  # the per-step metrics (mjx_tracks.metrics.STEP)
 from mjx_tracks.robots import get_robot
 from mjx_tracks.sim import mjx_private
 from mjx_tracks.sim.control import Controller
@@ -29,12 +27,9 @@ from mjx_tracks.sim.simulator import Simulator
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
 from scenes.scene import SceneState
-from scenes.staircase import StairScene, Staircase, stair_ranges
-from scenes.terrain import TerrainScene, terrain_ranges
-
-METRICS = tuple(f"reward/{t}" for t in REWARD_TERMS) + (
-    "progress", "cog_deviation", "on_stairs", "pitch_rate", "tipped_over", "goal_reached",
-    "moved_away", "physics_nan")
+from scenes.kinds import scene_kind
+from scenes.staircase import StairScene, Staircase
+from scenes.terrain import TerrainScene
 
 
 @struct.dataclass
@@ -53,15 +48,8 @@ class EnvState:
 
 
 def make_scene(s: SceneConfig) -> StairScene | NavScene | TerrainScene:
-  """The scene generator of a task's scene section."""
-  if s.kind == "stairs":
-    ranges = stair_ranges(s.tread, s.riser, s.steps)
-    return StairScene(s.direction, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
-  if s.kind == "terrain":
-    ranges = terrain_ranges(s.terrains, {k: dataclasses.asdict(getattr(s.terrain, k)) for k in s.terrains})
-    return TerrainScene(s.terrains, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
-  return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,
-                  s.nav_floor_height)
+  """The scene generator of a task's scene section (its kind's, scenes.kinds)."""
+  return scene_kind(s.kind).make(s)
 
 
 class TrackedRobotEnv(Env):
@@ -70,14 +58,13 @@ class TrackedRobotEnv(Env):
   def __init__(self, cfg: TaskConfig):
     self.cfg = cfg
     self.robot = get_robot(cfg.robot)
-    if ("arm" in cfg.observation.parts) and not self.robot.has_arm:
-      raise ConfigError(f"observation.parts: 'arm' needs a robot with an arm; robot {cfg.robot} has none")
     try:
       self.controller = Controller.create(self.robot, cfg.control.mode, cfg.control.increments,
                                           cfg.control.v_range, cfg.control.dof_curriculum)
     except ValueError as e:
       raise ConfigError(f"control: {e}") from e
-    self.scene = make_scene(cfg.scene)
+    self.kind = scene_kind(cfg.scene.kind)
+    self.scene = self.kind.make(cfg.scene)
     self.sim = Simulator.create(self.robot, self.scene.world_xml(), cfg.physics)
     self.substeps = int(round(cfg.control.period / cfg.physics.timestep))
     o = cfg.observation
@@ -163,7 +150,7 @@ class TrackedRobotEnv(Env):
 
   def _cog(self, d: mjx.Data, scene: SceneState) -> tuple[jax.Array, jax.Array]:
     """COG deviation (m) and whether the robot is on the stairs (1.0 / 0.0)."""
-    if self.cfg.scene.kind != "stairs":
+    if "cog_deviation" not in self.kind.signals:  # a staircase's incline defines it
       return jnp.float32(0.0), jnp.float32(0.0)
     st: Staircase = self.scene.stairs(scene.xi)
     body = self.sim.layout.chassis_body

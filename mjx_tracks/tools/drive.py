@@ -20,6 +20,7 @@ from mjx_tracks.envs.config import default_config
 from mjx_tracks.envs.rewards import goal_distance, goal_reached
 from mjx_tracks.robots import get_robot
 from mjx_tracks.sim.control import command_belt_speeds
+from mjx_tracks.metrics import trajectory_success
 from mjx_tracks.sim.pose import chassis_rpy, tipped_over
 from mjx_tracks.sim.simulator import Simulator, staircase_simulator
 from mjx_tracks.tools.scripted import StairScript
@@ -110,7 +111,8 @@ def scripted_rollout(setup: DriveSetup, n_steps: int) -> np.ndarray:
 def summarize(setup: DriveSetup, qpos: np.ndarray) -> dict:
   """Distance travelled, final height, max |pitch|, tipped over, goal reached (the tasks' rule)."""
   rpy = np.asarray(chassis_rpy(jnp.asarray(qpos)))
-  tipped = bool(np.asarray(tipped_over(jnp.asarray(rpy))).any())
+  tipped_flags = np.asarray(tipped_over(jnp.asarray(rpy)))
+  tipped = bool(tipped_flags.any())
   xyz = qpos[:, :3]
   dist = goal_distance(jnp.asarray(xyz), setup.goal(), sc.GOAL_HALFWIDTH, setup.goal_tolerance)
   return {
@@ -118,7 +120,7 @@ def summarize(setup: DriveSetup, qpos: np.ndarray) -> dict:
       "final_height_m": float(xyz[-1, 2] - setup.sim.robot.spawn_height),
       "max_abs_pitch_rad": float(np.abs(rpy[:, 1]).max()),
       "tipped_over": tipped,
-      "goal_reached": bool(np.asarray(goal_reached(dist)).any()) and not tipped,
+      "goal_reached": trajectory_success(np.asarray(goal_reached(dist)), tipped_flags),  # the tasks' success
   }
 
 

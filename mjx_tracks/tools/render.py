@@ -10,9 +10,12 @@ FOLLOW = {"distance": 3.0, "elevation": -20.0}  # m, deg: behind and beside the 
 OVERHEAD = {"distance": 9.0, "elevation": -65.0}  # m, deg: high above it, over the walls (navigation areas)
 
 
-def camera_for(scene_kind: str) -> dict:
-  """The following camera's distance and elevation for a scene kind (configs: scene.kind)."""
-  return OVERHEAD if scene_kind == "nav" else FOLLOW
+CAMERAS = {"follow": FOLLOW, "overhead": OVERHEAD}  # a scene kind's `camera` (scenes.kinds) -> its settings
+
+
+def camera_for(camera: str) -> dict:
+  """The following camera's distance and elevation: a scene kind's camera, "follow" or "overhead"."""
+  return CAMERAS[camera]
 
 
 def render_frames(mj_model, qpos_seq: np.ndarray, width: int = 480, height: int = 360,

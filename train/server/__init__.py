@@ -1,1 +1,7 @@
-"""The experiment server: a REST API over the experiment database (and, in time, the dashboard)."""
+"""The experiment server: the dashboard and a REST API over the experiment database.
+
+Needs the [server] extra (train.extras): importing it without that extra fails in one line."""
+
+from train.extras import require_extra
+
+require_extra("server", "train.server")

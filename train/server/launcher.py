@@ -14,7 +14,7 @@ import threading
 import traceback
 
 from train.db import ExperimentDB, utc_now
-from train.evaluate import EVAL_TRIALS
+from train.evaluation import EVAL_TRIALS
 from train.study.spec import Cell, study_from_dict
 from train.study.worker import EVALUATE, TRAIN, read_pid_file, run_in_place
 

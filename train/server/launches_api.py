@@ -11,7 +11,7 @@ from pydantic import BaseModel
 
 from mjx_tracks.envs.config import ConfigError
 from train.db import ExperimentDB
-from train.evaluate import EVAL_TRIALS
+from train.evaluation import EVAL_TRIALS
 from train.server.deps import db_of, run_or_404
 from train.server.fields import CriterionText, Name, Overrides, Seed, Steps, Trials, YamlText
 from train.server.config_api import config_error

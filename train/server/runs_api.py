@@ -12,6 +12,8 @@ import zipfile
 from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import FileResponse, StreamingResponse
 
+from mjx_tracks.metrics import EPISODE_NAMES
+
 from train.server.deps import db_of, run_or_404
 
 router = APIRouter(prefix="/api/runs", tags=["runs"])
@@ -63,7 +65,7 @@ def get_evals(run_id: str, request: Request) -> list[dict]:
   db = db_of(request)
   run_or_404(db, run_id)
   groups = db.eval_groups(run_id)
-  figures = ("progress", "success", "cog_deviation", "pitch_rate", "tipped_over", "length")
+  figures = EPISODE_NAMES
   return [{"scene": scene, "budget": budget, "trials": len(rows),
            "mean": {k: sum(r[k] for r in rows) / len(rows) for k in figures},
            "per_trial": [{k: r[k] for k in ("trial", *figures)} for r in rows]}

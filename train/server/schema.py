@@ -10,6 +10,7 @@ import re
 import typing
 
 from mjx_tracks.envs.config import DEFAULTS, TaskConfig, config_dir, load_config
+from scenes.kinds import parameter_limits
 
 LINE = re.compile(r"^(?P<indent> *)(?P<key>[A-Za-z_][A-Za-z0-9_]*):(?P<rest>[^#]*)(#\s*(?P<note>.*))?$")
 
@@ -39,6 +40,7 @@ def _kind(tp) -> str:
 
 
 def _fields(cls, values, prefix: str, notes: dict) -> list[dict]:
+  limits = parameter_limits()  # a scene parameter's range: its scene kind's (scenes.kinds)
   hints = typing.get_type_hints(cls)
   out = []
   for f in dataclasses.fields(cls):
@@ -50,7 +52,7 @@ def _fields(cls, values, prefix: str, notes: dict) -> list[dict]:
           if isinstance(value, tuple) else value
       b = f.metadata.get("bound")  # mjx_tracks.bounds: the range validation checks
       out.append({"key": key, "kind": _kind(hints[f.name]), "default": plain, "note": notes.get(key, ""),
-                  "range": b.text() if b else ""})
+                  "range": b.text() if b else limits.get(key, "")})
   return out
 
 

@@ -16,6 +16,7 @@ import threading
 import time
 
 from train.db import ExperimentDB
+from train.run_record import read_run_record, run_id_in
 from train.study.spec import Cell, StudySpec, cells
 from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
 
@@ -33,17 +34,14 @@ def cell_folder(study_folder: str, cell: Cell) -> str:
   return cell_folder_of(study_folder, cell.id)
 
 
-def run_id_in(run_folder: str) -> str | None:
-  """The run id in a run folder's run.json, if it has one yet."""
-  path = os.path.join(run_folder, "run.json")
-  return json.load(open(path)).get("run_id") if os.path.exists(path) else None
-
-
 def _trained_to_the_end(run_folder: str) -> bool:
   """Whether the run's newest checkpoint is at its total steps (train.run refuses to resume it)."""
   from train.checkpoints import trained_to  # noqa: PLC0415  (JAX: only where a run came back)
-  path = os.path.join(run_folder, "run.json")
-  return trained_to(run_folder, json.load(open(path)).get("total_steps") if os.path.exists(path) else None)
+  try:
+    total = read_run_record(run_folder, ()).get("total_steps")
+  except (FileNotFoundError, ValueError):
+    total = None
+  return trained_to(run_folder, total)
 
 
 def read_cells(folder: str) -> dict:

@@ -7,12 +7,14 @@ import os
 
 import numpy as np
 
+from mjx_tracks.metrics import BY_NAME, REPORT_COLUMN
 from train.study.results import CURVE_METRICS, StudyResults
 from train.study.statistics import curve_band, iqm_intervals
 
 X_AXES = {"step": "environment steps", "wall_s": "wall time (s)"}
-LABELS = {"return_mean": "return", "success_rate": "success", "progress_mean": "progress", "eps": "eps",
-          "cog_deviation_mean": "COG deviation (m)", "pitch_rate_mean": "|pitch rate| (rad/s)"}
+# a report column's axis label: its metric's name and unit (mjx_tracks.metrics.REPORT)
+LABELS = {"return_mean": "return", "eps": "eps", **{c: n.replace("_", " ") + (f" ({BY_NAME[n].unit})" if BY_NAME[n].unit else "")
+                                                    for n, c in REPORT_COLUMN.items()}}
 
 
 def _pyplot():

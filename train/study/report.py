@@ -10,7 +10,7 @@ import os
 import numpy as np
 
 from mjx_tracks.envs.config import load_config
-from train.evaluate import HARDEST, HELD_OUT, NAV
+from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.study.executor import overview
 from train.study.figures import write_figures
 from train.study.paper import FIGURE9
@@ -86,15 +86,16 @@ def generalization_table(results: StudyResults) -> list[str]:
   """Each terrain task drawing several kinds (mixed) on each kind's hardest configuration, beside
   the specialist tasks of that kind on theirs: IQM [95 % CI] of success over seeds."""
   kinds = {t: load_config(t).scene for t in results.spec.tasks}
-  mixed = [t for t, s in kinds.items() if s.kind == "terrain" and len(s.terrains) > 1]
+  groups = {t: scene_kind(s.kind).groups(s) if scene_kind(s.kind).has_hardest(s) else () for t, s in kinds.items()}
+  mixed = [t for t, g in groups.items() if len(g) > 1]
   lines = []
   for group, task, budget in results.groups():
     if task not in mixed:
       continue
-    for kind in kinds[task].terrains:
+    for kind in groups[task]:
       success = lambda t, scene: iqm_intervals({"x": results.final(group, t, budget, scene, "success")}).get("x")  # noqa: E731
       own = success(task, HARDEST + kind)
-      special = [(t, success(t, "hardest")) for t, s in kinds.items() if s.kind == "terrain" and s.terrains == (kind,)]
+      special = [(t, success(t, "hardest")) for t, g in groups.items() if g == (kind,)]
       lines.append(f"| {group} | {budget:,} | {kind} | {ci_text(own)} | "
                    f"{'; '.join(f'{t}: {ci_text(e)}' for t, e in special) or '-'} |")
   head = ["| group | budget | terrain kind | mixed policy, success on its hardest | specialist policy, success on its hardest |",

@@ -10,13 +10,15 @@ import os
 
 import numpy as np
 
+from mjx_tracks.metrics import EPISODE_NAMES, REPORT_NAMES
 from train.db import ExperimentDB
-from train.study.executor import STUDY_DB, cell_folder_of, read_cells, run_id_in
+from train.run_record import run_id_in
+from train.study.executor import STUDY_DB, cell_folder_of, read_cells
 from train.study.spec import Cell, StudySpec, cells, load_study
 
 SPEC_FILE = "study.yaml"  # the study's spec as it ran, written into its folder
-EVAL_METRICS = ("success", "progress", "cog_deviation", "pitch_rate", "tipped_over")  # per trial
-CURVE_METRICS = ("return_mean", "success_rate", "progress_mean", "eps", "cog_deviation_mean", "pitch_rate_mean")
+EVAL_METRICS = tuple(n for n in EPISODE_NAMES if n != "length")  # per trial (mjx_tracks.metrics.EPISODE)
+CURVE_METRICS = tuple(n for n in REPORT_NAMES if n != "tipped_rate")  # per report (mjx_tracks.metrics.REPORT)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -11,7 +11,7 @@ from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks
                                     parse_mapping, require, require_plain_name, show)
 from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
 from train.early_stop import parse_early_stop
-from train.evaluate import EVAL_TRIALS
+from train.evaluation import EVAL_TRIALS
 from train.presets import get_preset
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": []}

@@ -1,0 +1,87 @@
+"""A fingerprint of the simulator's behaviour: a 12-step batched rollout of one task per scene kind,
+through the training wrappers (curriculum auto-reset included), hashed bit for bit.
+
+  python -m mjx_tracks.tools.rollout_digest --write results/rollout_digest.json   # record
+  python -m mjx_tracks.tools.rollout_digest --check results/rollout_digest.json   # compare (exit 1 if any differs)
+
+Each task runs N_ENVS robots for N_STEPS control steps from a fixed key, with actions ~ U(-1, 1)
+from that key, and episodes cut at EPISODE_STEPS steps so that the curriculum's reset runs inside
+the rollout. The digest is the SHA-256 of every step's observation, reward, done flag, metrics,
+positions (qpos) and scene (boxes, spawn, goal, parameters), as float32 bytes. A refactor that changes no behaviour keeps every digest.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+
+N_ENVS, N_STEPS, EPISODE_STEPS, SEED = 4, 12, 5, 0
+# one task per scene kind: stairs up and down, every terrain kind, both navigation tasks
+TASKS = ("asc-inc-cog", "des-inc-ang", "step-up", "step-down", "uplift", "rails", "waves", "blocks",
+         "landing-up", "landing-down", "spiral-up", "spiral-down", "nav", "nav-obstacles")
+
+
+def rollout_digest(task: str) -> str:
+  """The SHA-256 (hex) of one task's 12-step batched rollout."""
+  import jax  # noqa: PLC0415
+  import numpy as np  # noqa: PLC0415
+
+  from mjx_tracks.envs.config import load_config  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
+  from mjx_tracks.envs.wrappers import batched_env  # noqa: PLC0415
+
+  env = batched_env(TrackedRobotEnv(load_config(task, [f"episode.max_steps={EPISODE_STEPS}"])))
+
+  @jax.jit
+  def run(key):
+    k_reset, k_act = jax.random.split(key)
+    state = env.reset(jax.random.split(k_reset, N_ENVS))
+
+    def one(state, k):
+      action = jax.random.uniform(k, (N_ENVS, env.action_size), minval=-1.0, maxval=1.0)
+      state = env.step(state, action)
+      es = state.pipeline_state
+      return state, (state.obs, state.reward, state.done, state.metrics, es.data.qpos, es.scene)
+
+    return jax.lax.scan(one, state, jax.random.split(k_act, N_STEPS))[1]
+
+  trace = jax.device_get(run(jax.random.PRNGKey(SEED)))
+  h = hashlib.sha256()
+  for leaf in jax.tree_util.tree_leaves(trace):  # dict leaves in sorted-key order
+    h.update(np.ascontiguousarray(np.asarray(leaf, np.float32)).tobytes())
+  return h.hexdigest()
+
+
+def main(argv=None) -> int:
+  p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+  g = p.add_mutually_exclusive_group(required=True)
+  g.add_argument("--write", metavar="JSON", help="record every task's digest in JSON")
+  g.add_argument("--check", metavar="JSON", help="compare every task's digest with JSON's")
+  p.add_argument("--tasks", nargs="+", default=TASKS, help="a subset of the tasks")
+  args = p.parse_args(argv)
+  import jax  # noqa: PLC0415
+  from mjx_tracks import compile_cache  # noqa: PLC0415
+  compile_cache.enable()
+  recorded = json.load(open(args.check)) if args.check else {}
+  digests, differ = {}, []
+  for task in args.tasks:
+    digests[task] = rollout_digest(task)
+    same = "" if not args.check else " same" if recorded["digests"].get(task) == digests[task] else " DIFFERS"
+    differ += [task] if same == " DIFFERS" else []
+    print(f"{task:15s} {digests[task][:16]}{same}", file=sys.stderr, flush=True)
+  if args.write:
+    record = {"what": __doc__.split("\n\n")[0], "command": "python -m mjx_tracks.tools.rollout_digest --write " + args.write,
+              "device": f"{jax.devices()[0].platform} ({jax.devices()[0].device_kind})", "jax": jax.__version__,
+              "n_envs": N_ENVS, "n_steps": N_STEPS, "episode_steps": EPISODE_STEPS, "seed": SEED, "digests": digests}
+    with open(args.write, "w") as f:
+      json.dump(record, f, indent=1)
+      f.write("\n")
+  if differ:
+    print(f"differ: {', '.join(differ)}", file=sys.stderr)
+  return 1 if differ else 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())

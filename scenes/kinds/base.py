@@ -1,0 +1,73 @@
+"""What a scene kind declares, in one place: its parameters, its world, spawn and goal (its scene
+generator), its evaluation scenes, its safety signals and its validation. `scenes.kinds` holds the
+registry; config loading, the env, evaluation, early stopping, rendering and study reports ask
+the kind of a task (`scene_kind(cfg.scene.kind)`) instead of comparing its name.
+
+Evaluation scene names: `uniform`, `incremental` and `train` exist for every kind (the task's
+ranges drawn uniformly, by the incremental sampler, or by the task's own sampler); a kind adds
+its own: `hardest` (every parameter at its hard end), HELD_OUT + NAME (a fixed configuration of the
+task's evaluation section), HARDEST + KIND (one sub-kind alone at its hardest), NAV + AREA (one
+navigation area alone).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+  from mjx_tracks.envs.config import SceneConfig, TaskConfig
+
+HELD_OUT = "held-out/"  # scene name prefix of a fixed held-out configuration (evaluation.held_out[_terrain])
+HARDEST = "hardest/"  # scene name prefix of one terrain kind alone at its hardest (terrain tasks)
+NAV = "nav/"  # scene name prefix of one navigation area kind alone (nav tasks)
+COMMON_SCENES = ("uniform", "incremental", "train")  # evaluation scenes of every kind
+
+
+class SceneKind:
+  """A scene kind; subclasses override what differs. Nothing on an instance changes."""
+
+  name: str = ""
+  camera: str = "follow"  # mjx_tracks.tools.render: "follow" (behind the robot) | "overhead"
+  signals: tuple[str, ...] = ("pitch_rate",)  # safety signals its scenes measure (metrics names)
+  parameters: str = ""  # one line for the README / dashboard: what its xi holds
+
+  def has_hardest(self, s: SceneConfig) -> bool:
+    """Whether its scenes have a hardest configuration (every parameter at its hard end)."""
+    return False
+
+  def validate(self, cfg: TaskConfig) -> None:
+    """ConfigError (naming the key) for any part of cfg this kind cannot run."""
+
+  def make(self, s: SceneConfig):
+    """The scene generator (world_xml(), sample(key, eps) -> SceneState) of a scene section."""
+    raise NotImplementedError
+
+  def suite(self, cfg: TaskConfig) -> list[str]:
+    """The evaluation scenes of a study's suite."""
+    return ["uniform"]
+
+  def pinned(self, cfg: TaskConfig, scene: str) -> TaskConfig | None:
+    """The task with every episode drawn as one of this kind's own evaluation scenes says
+    (hardest, HELD_OUT + NAME, ...); None if `scene` is none of them; ConfigError if it is
+    malformed for this task."""
+    return None
+
+  def early_stop_return(self, s: SceneConfig) -> float | None:
+    """The paper's return threshold for early stopping, where the paper gives one."""
+    return None
+
+  def groups(self, s: SceneConfig) -> tuple[str, ...]:
+    """The sub-kinds its scenes draw (terrain kinds, navigation areas), for per-kind reports."""
+    return ()
+
+
+def replace_scene(cfg: TaskConfig, **changes) -> TaskConfig:
+  """cfg with its scene section changed."""
+  return dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, **changes))
+
+
+def no_held_out_staircases(cfg: TaskConfig) -> None:
+  """ConfigError unless the task names no held-out staircase (they need a stair task)."""
+  from mjx_tracks.envs.config import require  # noqa: PLC0415
+  require(not cfg.evaluation.held_out, "evaluation.held_out", "held-out staircases need a stair task; set []")

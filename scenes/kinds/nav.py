@@ -1,0 +1,46 @@
+"""2D navigation areas (scenes.navigation lays them out): hallway or zigzag, with optional low
+floor obstacles; xi = the two wall obstacles' extents and the gap."""
+
+from __future__ import annotations
+
+from scenes.kinds.base import HARDEST, HELD_OUT, NAV, SceneKind, no_held_out_staircases, replace_scene
+from scenes.navigation import NAV_AREAS
+
+
+class Nav(SceneKind):
+  name = "nav"
+  camera = "overhead"
+  parameters = "scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height"
+
+  def validate(self, cfg) -> None:
+    from mjx_tracks.envs.config import require  # noqa: PLC0415
+    from mjx_tracks.sim.control import CONTROL_MODES  # noqa: PLC0415
+    areas = cfg.scene.nav_kinds
+    require(bool(areas) and all(a in NAV_AREAS for a in areas) and len(set(areas)) == len(areas),
+            "scene.nav_kinds", lambda: f"must be a non-empty list of distinct areas of {list(NAV_AREAS)}, got {list(areas)}")
+    require("w" in CONTROL_MODES[cfg.control.mode], "control.mode", "navigation needs a mode with angular velocity w")
+    no_held_out_staircases(cfg)
+
+  def make(self, s):
+    from scenes.navigation import NavScene  # noqa: PLC0415
+    return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,
+                    s.nav_floor_height)
+
+  def suite(self, cfg) -> list[str]:
+    areas = cfg.scene.nav_kinds
+    return ["uniform", *((NAV + a for a in areas) if len(areas) > 1 else ())]
+
+  def pinned(self, cfg, scene: str):
+    from mjx_tracks.envs.config import ConfigError  # noqa: PLC0415
+    if scene.startswith(NAV):
+      area = scene[len(NAV):]
+      if area not in cfg.scene.nav_kinds:
+        raise ConfigError(f"scene {scene!r}: the task draws navigation areas {list(cfg.scene.nav_kinds)}")
+      return replace_scene(cfg, nav_kinds=(area,))
+    if scene == "hardest" or scene.startswith((HARDEST, HELD_OUT)):
+      raise ConfigError(f"scene {scene!r}: navigation tasks have no hardest or held-out configuration; "
+                        f"use uniform or {NAV}AREA")
+    return None
+
+  def groups(self, s) -> tuple[str, ...]:
+    return tuple(s.nav_kinds)

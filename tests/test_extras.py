@@ -1,0 +1,50 @@
+"""Optional extras: the env and the trainer import none of them; a command whose extra is missing
+refuses in one line naming it; pyproject.toml's extras hold the modules train/extras.py lists."""
+
+import os
+import pathlib
+import re
+import subprocess
+import sys
+import tomllib
+
+from train.extras import EXTRAS
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+OPTIONAL = sorted({m for mods in EXTRAS.values() for m in mods})
+
+
+def _run(code: str, block: list[str], tmp_path) -> subprocess.CompletedProcess:
+  """Python with the given modules made unimportable (a sitecustomize sets them to None)."""
+  (tmp_path / "sitecustomize.py").write_text("import sys\nfor m in %r:\n  sys.modules[m] = None\n" % block)
+  env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)]), "JAX_PLATFORMS": "cpu"}
+  return subprocess.run([sys.executable, *code], capture_output=True, text=True, env=env, cwd=ROOT, timeout=300)
+
+
+def test_the_env_and_trainer_import_without_any_extra(tmp_path):
+  code = "import train.run, train.evaluate, train.build, train.loop, mjx_tracks.envs.gym_env; print('ok')"
+  r = _run(["-c", code], OPTIONAL, tmp_path)
+  assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
+
+
+def test_a_command_without_its_extra_says_which_in_one_line(tmp_path):
+  for command, extra in (("train.study", "studies"), ("train.server", "server")):
+    r = _run(["-m", command, "--help"], OPTIONAL, tmp_path)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr[-2000:]
+    assert f"needs the [{extra}] extra" in r.stderr and f"pip install 'mjx-tracks[{extra}]'" in r.stderr
+
+
+def test_pyproject_extras_install_the_modules_listed():
+  extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+
+  def names(extra: str) -> set[str]:
+    out = set()
+    for req in extras[extra]:
+      name = re.match(r"[A-Za-z0-9_.-]+", req).group(0)
+      inner = re.match(r"mjx-tracks\[(.+)\]", req)
+      out |= set().union(*(names(e) for e in inner.group(1).split(","))) if inner else {name.lower()}
+    return out
+
+  for extra, modules in EXTRAS.items():
+    assert set(modules) <= names(extra), extra
+  assert names("all") >= names("studies") | names("server") | names("notebooks")

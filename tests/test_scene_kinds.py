@@ -1,0 +1,62 @@
+"""The scene-kind registry (scenes.kinds): every invalid combination is refused when the config
+loads, in one line naming the key; no scene-kind name is compared outside the registry."""
+
+import pathlib
+import re
+
+import pytest
+
+from mjx_tracks.envs.config import REWARD_SIGNALS, ConfigError, available_tasks, load_config
+from scenes.kinds import SCENE_KINDS, scene_kind
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("task, override, key, words", [
+    ("asc-inc-cog", "robot=2", "control.mode", "drives the arm"),  # robot 2 has no arm
+    ("asc-inc-cog", "control.mode=3dof_stairs", "observation.parts", None),  # fine: robot 1 has an arm
+    ("asc-inc-cog-r2", "observation.parts=[v, arm]", "observation.parts", "'arm' needs a robot with an arm"),
+    ("asc-inc-cog", "control.v_range=[0, 9]", "control.v_range", "must lie inside"),
+    ("step-up", "reward.kind=cog", "reward.kind", "terrain scenes do not measure"),
+    ("nav", "reward.kind=cog", "reward.kind", "nav scenes do not measure"),
+    ("nav", "scene.nav_kinds=[maze]", "scene.nav_kinds", "areas of ['hallway', 'zigzag']"),
+    ("nav", "scene.nav_kinds=[zigzag, zigzag]", "scene.nav_kinds", "distinct"),
+    ("nav", "control.mode=5dof_stairs", "control.mode", "angular velocity w"),
+    ("step-up", "scene.terrains=[lava]", "scene.terrains", "non-empty list"),
+    ("spiral-up", "scene.random_goal=true", "scene.random_goal", "centre line"),
+    ("step-up", "evaluation.held_out=[{name: a, tread: 0.4, riser: 0.2, steps: 3}]", "evaluation.held_out", "stair task"),
+    ("asc-inc-cog", "scene.kind=lava", "scene.kind", "must be one of ['stairs', 'terrain', 'nav']"),
+])
+def test_invalid_combinations_are_refused_at_load_naming_the_key(task, override, key, words):
+  if words is None:
+    load_config(task, [override])  # the control case loads
+    return
+  with pytest.raises(ConfigError) as e:
+    load_config(task, [override])
+  assert e.value.key == key and str(e.value).startswith(f"{key}: ") and words in str(e.value)
+  assert "\n" not in str(e.value)
+
+
+def test_every_task_loads_and_its_kind_measures_its_rewards_signal():
+  for task in available_tasks():
+    cfg = load_config(task)
+    signal = REWARD_SIGNALS[cfg.reward.kind]
+    assert signal is None or signal in scene_kind(cfg.scene.kind).signals, task
+
+
+def test_every_kinds_suite_names_scenes_it_can_pin():
+  from train.evaluation import scene_config, suite_scenes
+  for task in available_tasks():
+    cfg = load_config(task)
+    for scene in suite_scenes(cfg):
+      assert scene_config(cfg, scene).scene.kind == cfg.scene.kind, (task, scene)
+
+
+def test_no_scene_kind_name_is_compared_outside_the_registry():
+  """`kind == "stairs"`, `.kind != 'nav'`, `kind in ("stairs", ...)` appear only under scenes/kinds/."""
+  names = "|".join(SCENE_KINDS)
+  compared = re.compile(rf"""(==|!=)\s*["']({names})["']|["']({names})["']\s*(==|!=)|in \(["']({names})["']""")
+  found = [f"{p.relative_to(ROOT)}:{i}" for folder in ("mjx_tracks", "scenes", "train")
+           for p in (ROOT / folder).rglob("*.py") if "kinds" not in p.parent.name
+           for i, line in enumerate(p.read_text().splitlines(), 1) if compared.search(line)]
+  assert not found

@@ -1,0 +1,133 @@
+"""Evaluation as a library: the evaluation scenes of a task (its scene kind's, scenes.kinds), trial
+rollouts of a policy compiled once, per-trial figures (mjx_tracks.metrics) and where reports go.
+`python -m train.evaluate` (train/evaluate.py) is its command line; build, probe, studies, the
+server and scripts import from here."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+
+import numpy as np
+
+from mjx_tracks.envs.config import ConfigError, TaskConfig
+from scenes.kinds import COMMON_SCENES, scene_kind
+from train.run_record import run_config  # noqa: F401  (the config a run recorded: part of this library)
+
+SCENES = ("hardest", *COMMON_SCENES)  # the plain scene names (a task's kind adds prefixed ones)
+
+
+def suite_scenes(cfg: TaskConfig) -> list[str]:
+  """A study's evaluation suite: its scene kind's (scenes.kinds)."""
+  return scene_kind(cfg.scene.kind).suite(cfg)
+
+
+def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
+  """The task with its scenes drawn as an evaluation scene says: uniform, incremental or train
+  (any kind), or one of its scene kind's own (hardest, HELD_OUT + NAME, ...; scenes.kinds)."""
+  if scene in COMMON_SCENES:
+    return cfg if scene == "train" else dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, sampler=scene))
+  pinned = scene_kind(cfg.scene.kind).pinned(cfg, scene)
+  if pinned is None:
+    raise ConfigError(f"unknown scene {scene!r} for a {cfg.scene.kind} task: one of {', '.join(COMMON_SCENES)} or "
+                      f"its suite's {', '.join(s for s in suite_scenes(cfg) if s not in COMMON_SCENES) or '(none)'}")
+  return pinned
+
+
+EVAL_TRIALS = 100  # trials of an evaluation (and of the in-training hardest probe)
+EVAL_SEED = 1  # their reset keys: jax.random.split(PRNGKey(EVAL_SEED), trials)
+EVAL_EPS = 1.0  # the difficulty handed to reset (pinned scenes such as hardest ignore it)
+
+
+def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=lambda s: s.obs):
+  """(core, rollout): the task env and a pure rollout(params, keys) -> (sums, qpos of trial 0 per
+  step, trial 0's scene), one episode per trial from `core.reset_at(key, eps)` with actions
+  `make_act(params)(observe(state))` (a policy sees the observation; a scripted controller may see
+  the whole state); sums holds each trial's METRICS sums, length and final chassis position."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.envs.task_env import METRICS, TrackedRobotEnv  # noqa: PLC0415
+  core = TrackedRobotEnv(cfg)
+
+  def rollout(params, keys):
+    act = make_act(params)
+    s = jax.vmap(core.reset_at, in_axes=(0, None, None))(keys, jnp.float32(eps), jnp.float32(1.0))
+    acc0 = {**{k: jnp.zeros(trials) for k in METRICS}, "length": jnp.zeros(trials),
+            "final_pos": s.pipeline_state.data.qpos[:, :3]}
+
+    def body(carry, _):
+      s, acc, active = carry
+      s = jax.vmap(core.step)(s, act(observe(s)))
+      a = active.astype(jnp.float32)
+      acc = {**{k: acc[k] + a * s.metrics[k] for k in METRICS}, "length": acc["length"] + a,
+             "final_pos": jnp.where(active[:, None], s.pipeline_state.data.qpos[:, :3], acc["final_pos"])}
+      return (s, acc, active & (s.done == 0)), s.pipeline_state.data.qpos[0]
+
+    (_, acc, _), qpos = jax.lax.scan(body, (s, acc0, jnp.ones(trials, bool)), None, length=cfg.episode.max_steps)
+    scene0 = jax.tree_util.tree_map(lambda x: x[0], s.pipeline_state.scene)
+    return acc, jnp.concatenate([s.pipeline_state.data.qpos[:1], qpos]), scene0
+
+  return core, rollout
+
+
+def trial_keys(trials: int, seed: int = EVAL_SEED):
+  import jax  # noqa: PLC0415
+  return jax.random.split(jax.random.PRNGKey(seed), trials)
+
+
+def per_trial_figures(acc) -> dict:
+  """Per-trial figures (mjx_tracks.metrics.EPISODE) and final chassis position from rollout sums."""
+  from mjx_tracks.metrics import episode_figures  # noqa: PLC0415
+  acc = {k: np.asarray(v) for k, v in acc.items()}
+  final = acc["final_pos"]
+  return {**episode_figures(acc, acc["length"]), "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
+
+
+def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, record: bool = False,
+                 observe=lambda s: s.obs):
+  """run(params) -> (per-trial figures with each trial's final chassis position, qpos of trial 0 at
+  every step and a C model of its scene if record): compiled once, for every policy of one network."""
+  import jax  # noqa: PLC0415
+  core, rollout = trial_rollout(cfg, make_act, trials, eps, observe)
+  compiled, keys = jax.jit(rollout), trial_keys(trials, seed)
+
+  def run(params):
+    acc, qpos, scene0 = compiled(params, keys)
+    # trial 0's scene in a C model, for rendering its recorded qpos
+    render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size, scene0.box_yaw) if record else None
+    return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
+
+  return run
+
+
+def milestone_folder(budget: int) -> str:
+  """Where a run exports its policy at a step budget (train.run --milestones), inside its folder."""
+  return os.path.join("milestones", str(budget))
+
+
+def saved_milestones(run_dir: str) -> list[int]:
+  """The budgets a run exported a policy at, ascending."""
+  path = os.path.join(run_dir, "milestones")
+  return sorted(int(d) for d in os.listdir(path) if d.isdigit()) if os.path.isdir(path) else []
+
+
+def report_path(run_dir: str, scene: str, budget: int | None) -> str:
+  """RUN/eval-<scene>[@<budget>].json (a held-out scene's / becomes -)."""
+  at = "" if budget is None else f"@{budget}"
+  return os.path.join(run_dir, f"eval-{scene.replace('/', '-')}{at}.json")
+
+
+def trials_in(path: str) -> int | None:
+  """The trial count of the report at path, if one is there and readable."""
+  try:
+    with open(path) as f:
+      return int(json.load(f)["trials"])
+  except (OSError, ValueError, KeyError, TypeError):
+    return None
+
+
+def fewer_trials_path(path: str, trials: int) -> str:
+  """Where a report of fewer trials than the one at path goes: eval-<scene>.<N>-trials.json."""
+  return f"{path[:-len('.json')]}.{trials}-trials.json"

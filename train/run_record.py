@@ -1,0 +1,59 @@
+"""A run's record, RUN_DIR/run.json: written by train.run (atomically), read here by everything else
+(resume, evaluation, the database CLI, studies). One reader: one set of checks and messages."""
+
+from __future__ import annotations
+
+import json
+import os
+
+RUN_JSON = "run.json"
+REQUIRED = ("run_id", "task", "algo", "config")  # what every record holds
+
+
+def run_json_path(run_dir: str) -> str:
+  return os.path.join(run_dir, RUN_JSON)
+
+
+def is_run_dir(path: str) -> bool:
+  return os.path.isdir(path) and os.path.exists(run_json_path(path))
+
+
+def read_run_record(run_dir: str, required: tuple[str, ...] = REQUIRED) -> dict:
+  """RUN_DIR/run.json; FileNotFoundError if there is none (not a run directory), ValueError in one
+  line if it is unreadable or lacks a required key (not a run's record)."""
+  path = run_json_path(run_dir)
+  if not os.path.exists(path):
+    raise FileNotFoundError(f"{run_dir} is not a run directory (no {RUN_JSON})")
+  try:
+    with open(path) as f:
+      meta = json.load(f)
+  except (OSError, ValueError) as e:
+    raise ValueError(f"{path} is not readable JSON ({str(e).splitlines()[0][:120]})") from None
+  missing = [k for k in required if not isinstance(meta, dict) or k not in meta]
+  if missing:
+    raise ValueError(f"{path} is not a run's record (no {', '.join(missing)})")
+  return meta
+
+
+def run_id_in(run_dir: str) -> str | None:
+  """The run id a run folder records, if it has a readable record yet."""
+  try:
+    return read_run_record(run_dir, ("run_id",))["run_id"]
+  except (FileNotFoundError, ValueError):
+    return None
+
+
+def run_config(run_dir: str):
+  """The task config (validated) a run recorded."""
+  from mjx_tracks.envs.config import from_dict  # noqa: PLC0415
+  return from_dict(read_run_record(run_dir)["config"])
+
+
+def write_run_record(run_dir: str, meta: dict) -> None:
+  """RUN_DIR/run.json, atomically."""
+  os.makedirs(run_dir, exist_ok=True)
+  path = run_json_path(run_dir)
+  tmp = path + ".tmp"
+  with open(tmp, "w") as f:
+    json.dump(meta, f, indent=1)
+  os.replace(tmp, path)
