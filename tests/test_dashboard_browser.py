@@ -2,7 +2,7 @@
 download) against a server on a free port whose launches run on a local Dask cluster with the
 stand-in runner (tests/fake_study_run.py; a real tiny CPU run made from the form: test_training.py). A run is created from the form and reaches `done`; its
 page shows a curve with points; two runs are compared; an invalid value shows its field error.
-The screenshots in docs/ come from scripts/dashboard_screenshots.py, on real runs."""
+The screenshots in docs/ come from scripts/docs/dashboard_screenshots.py, on real runs."""
 
 import os
 import pathlib

@@ -50,7 +50,7 @@ class ShardedStep(Wrapper):
 def use_gspmd_partitioner() -> None:
   """Partition with GSPMD, not Shardy (JAX's default): with Shardy, XLA's GPU compiler (jaxlib
   0.11.2, 2 H200s) segfaults on MJX's step under shard_map, even with no collective in it; with
-  GSPMD it compiles and gives the same rewards (`scripts/probe_shardmap.py`)."""
+  GSPMD it compiles and gives the same rewards (`scripts/gpu/probe_shardmap.py`)."""
   jax.config.update("jax_use_shardy_partitioner", False)
 
 

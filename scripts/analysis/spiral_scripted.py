@@ -4,7 +4,7 @@ script's flipper rules and speed (mjx_tracks.tools.scripted), on each scene of t
 evaluation suites; success and tip-overs by the tasks' own rules. Prints a table and writes JSON
 with the device, command and date; --gif DIR adds a GIF of trial 0 per task, lane and scene.
 
-cd scripts && python spiral_scripted.py --out ../results/terrain/spiral-scripted.json [--trials 8]
+python scripts/analysis/spiral_scripted.py --out results/terrain/spiral-scripted.json [--trials 8]
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 from mjx_tracks import compile_cache  # noqa: E402
 from mjx_tracks.envs.config import load_config  # noqa: E402
 from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: E402
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
         rows.append(run(task, scene, lane, args.trials, args.gif))
         print(json.dumps(rows[-1]), flush=True)
   out = {"device": str(jax.devices()[0]), "machine": platform.machine(), "argv": sys.argv,
-         "command": "cd scripts && python spiral_scripted.py " + " ".join(sys.argv[1:] if argv is None else argv),
+         "command": "python scripts/analysis/spiral_scripted.py " + " ".join(sys.argv[1:] if argv is None else argv),
          "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), "rows": rows}
   with open(args.out, "w") as f:
     json.dump(out, f, indent=1)

@@ -1,6 +1,6 @@
 """How long the dashboard's Runs page takes to show N runs (default 1,000) in the system Chromium:
 from navigation start to the last row in the table, median of 5 loads. Prints the figures.
-Usage: python scripts/bench_dashboard.py [--runs 1000]"""
+Usage: python scripts/docs/bench_dashboard.py [--runs 1000]"""
 
 from __future__ import annotations
 

@@ -10,7 +10,7 @@
 # its finished runs are skipped. A study still running when the machine goes back resumes the same
 # way from the last pack (its running attempts start again).
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.
-# Usage: [STUDY=paper] WAIT=560 SLOTS_PER_GPU=2 CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu_study.sh [ARGS]
+# Usage: [STUDY=paper] WAIT=560 SLOTS_PER_GPU=2 CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu/study.sh [ARGS]
 set -uo pipefail
 export PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 export XLA_FLAGS="--xla_cpu_multi_thread_eigen=false"  # many one-robot CPU runs side by side: one thread each

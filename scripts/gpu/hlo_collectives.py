@@ -2,7 +2,7 @@
 sit: one inside the env step's own loops (MJX's solver) makes every iteration wait for all devices.
 
   PYTHONPATH=. XLA_FLAGS=--xla_force_host_platform_device_count=2 JAX_PLATFORMS=cpu \
-    python scripts/hlo_collectives.py --task asc-inc-cog --preset cpu --num-envs 8
+    python scripts/gpu/hlo_collectives.py --task asc-inc-cog --preset cpu --num-envs 8
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@ run's policy on the task's hardest configuration (uniform scenes for navigation)
 ends, with the trial's outcome in OUT/index.json. Runs the tasks in parallel processes (EGL on a GPU
 host).
 
-cd scripts && python render_gifs.py STUDY_OR_RUNS_FOLDER OUT [--tasks T ...] [--jobs 8]
+python scripts/docs/render_gifs.py STUDY_OR_RUNS_FOLDER OUT [--tasks T ...] [--jobs 8]
 """
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     done = list(pool.map(lambda t: render(t, *runs[t], args.out), sorted(runs)))
   for d in done:
     print(json.dumps(d)[:300], flush=True)
-  index = {"command": "python render_gifs.py " + " ".join(sys.argv[1:] if argv is None else argv),
+  index = {"command": "python scripts/docs/render_gifs.py " + " ".join(sys.argv[1:] if argv is None else argv),
            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), "gifs": done}
   json.dump(index, open(os.path.join(args.out, "index.json"), "w"), indent=1)
   return 1 if any("error" in d for d in done) or not done else 0

@@ -1,7 +1,7 @@
 """Compiles (then runs) variants of the task's batched env step on all visible devices, to find
 which one crashes XLA's compiler; each variant in its own process, since a crash is a segfault.
 
-  python scripts/probe_shardmap.py VARIANT [NUM_ENVS]
+  python scripts/gpu/probe_shardmap.py VARIANT [NUM_ENVS]
   gspmd     plain jit of the batched step (the partitioner splits the batch)
   nogather  the step under shard_map (train.mesh.ShardedStep), curriculum per device
   gather    the same, the curriculum reduced across devices (what training runs)

@@ -1,21 +1,11 @@
-"""Where the environment step's time goes: full env throughput (physics + track model + beams +
-monitor + curriculum resets) of the task under config variants, side by side in one process, with
-each variant's speed-up over the first (the default config).
-
-python scripts/ablate_env.py [--task asc-inc-cog] [--envs 16384] [--reps 5] [--out FILE]
-                             [--variant NAME:KEY=VALUE;KEY=VALUE ...]
-"""
+"""ablate: where the environment step's time goes: full env throughput of the task under config
+variants, side by side in one process, with each variant's speed-up over the first."""
 
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 
-import mjx_tracks
-from mjx_tracks.sim import mjx_private
-from bench_env import time_env_step
-from result_file import write_result
+from train.bench.timing import time_env_step
 
 VARIANTS = {  # name -> config overrides; the first is the reference
     "every contact kept (before culling)": ("physics.contact_slots=-1", "physics.box_pairs=-1"),
@@ -30,6 +20,14 @@ VARIANTS = {  # name -> config overrides; the first is the reference
 }
 
 
+def add_args(p) -> None:
+  p.add_argument("--task", default="asc-inc-cog")
+  p.add_argument("--envs", type=int, default=16384)
+  p.add_argument("--reps", type=int, default=5)
+  p.add_argument("--variant", action="append", default=[], metavar="NAME:KEY=VALUE;KEY=VALUE",
+                 help="a variant (replaces the built-in list; the first is the reference)")
+
+
 def parse_variant(text: str) -> tuple[str, tuple[str, ...]]:
   """'NAME:KEY=VALUE;KEY=VALUE' -> (NAME, overrides)."""
   name, _, overrides = text.partition(":")
@@ -38,20 +36,15 @@ def parse_variant(text: str) -> tuple[str, tuple[str, ...]]:
 
 def measure(task: str, overrides: tuple[str, ...], n: int, reps: int) -> dict:
   """Control steps/s of n robots under the overrides, and the compile time."""
+  import mjx_tracks  # noqa: PLC0415
+  from mjx_tracks.sim import mjx_private  # noqa: PLC0415
   core = mjx_tracks.load(task, overrides)
   state, compile_s, step_s = time_env_step(core, n, reps)
   return {"control_steps_per_s": round(n / step_s), "compile_s": round(compile_s, 1),
           "substeps": core.substeps, "constraint_rows": mjx_private.efc_rows(state.pipeline_state.data)}
 
 
-def main(argv=None) -> int:
-  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  p.add_argument("--task", default="asc-inc-cog")
-  p.add_argument("--envs", type=int, default=16384)
-  p.add_argument("--reps", type=int, default=5)
-  p.add_argument("--variant", action="append", default=[], help="NAME:KEY=VALUE;KEY=VALUE (replaces the built-in list)")
-  p.add_argument("--out")
-  args = p.parse_args(argv)
+def run(args) -> tuple[list[dict], dict]:
   variants = dict(parse_variant(v) for v in args.variant) if args.variant else VARIANTS
   rows, base = [], None
   for name, overrides in variants.items():
@@ -61,9 +54,4 @@ def main(argv=None) -> int:
     row["speedup"] = round(row["control_steps_per_s"] / base, 3)
     rows.append(row)
     print(json.dumps(row), flush=True)
-  write_result(args.out, rows, task=args.task)
-  return 0
-
-
-if __name__ == "__main__":
-  sys.exit(main())
+  return rows, {"task": args.task}

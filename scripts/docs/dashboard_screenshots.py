@@ -2,7 +2,7 @@
 database, by default the paper study committed in results/studies/paper, plus one
 tiny CPU run launched from the form and run by the server's launcher (a local Dask cluster, the
 real train.run and train.evaluate) for the queue: the system Chromium driven by Playwright,
-headless. Usage: python scripts/dashboard_screenshots.py [--db PATH] [--out DIR]"""
+headless. Usage: python scripts/docs/dashboard_screenshots.py [--db PATH] [--out DIR]"""
 
 from __future__ import annotations
 

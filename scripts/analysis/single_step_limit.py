@@ -3,7 +3,7 @@ full belt speed with the joints held, on one step (a 1-step staircase: riser h, 
 of each riser h in a grid, from the tasks' spawn. Prints a table and writes JSON with the device,
 command and date.
 
-Usage (CPU is fine): cd scripts && python single_step_limit.py --out ../results/terrain/single-step-limit.json
+Usage (CPU is fine): python scripts/analysis/single_step_limit.py --out results/terrain/single-step-limit.json
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 from mjx_tracks import compile_cache  # noqa: E402
 from mjx_tracks.envs.config import default_config  # noqa: E402
 from mjx_tracks.robots import get_robot  # noqa: E402
@@ -78,7 +78,7 @@ def main() -> int:
       print(f"robot {robot} {direction}: " + ", ".join(
           f"{c} passes every riser up to {results[f'robot {robot} {direction}'][c]['highest_m']} m" for c in res),
           flush=True)
-  record = {"command": "cd scripts && python " + " ".join(sys.argv), "device": f"{jax.devices()[0].device_kind} "
+  record = {"command": "python " + " ".join(sys.argv), "device": f"{jax.devices()[0].device_kind} "
             f"({platform.processor() or platform.machine()}, {os.cpu_count()} cores)",
             "date": datetime.date.today().isoformat(), "seconds": args.seconds, "tread_m": TREAD,
             "wall_s": round(time.time() - t0, 1), "results": results}
