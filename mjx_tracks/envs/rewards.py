@@ -24,7 +24,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from mjx_tracks.envs.config import EpisodeConfig, RewardConfig
+from mjx_tracks.envs.config import REWARD_SIGNALS, EpisodeConfig, RewardConfig
 from mjx_tracks.sim.pose import tipped_over
 
 COG_MAX = 0.32  # m
@@ -103,12 +103,9 @@ class Monitor:
   episode: EpisodeConfig
 
   def safety_sample(self, cog_dev: jax.Array, pitch_rate: jax.Array) -> jax.Array:
-    """The raw safety figure the task's reward function penalizes."""
-    if self.reward.kind == "cog":
-      return cog_dev
-    if self.reward.kind == "angular":
-      return pitch_rate
-    return jnp.zeros_like(cog_dev)
+    """The raw safety figure the task's reward kind penalizes (config.REWARD_SIGNALS)."""
+    signal = REWARD_SIGNALS[self.reward.kind]
+    return jnp.zeros_like(cog_dev) if signal is None else {"cog_deviation": cog_dev, "pitch_rate": pitch_rate}[signal]
 
   def safety_scale(self) -> float:
     return {"cog": self.reward.cog_scale, "angular": self.reward.angular_scale}.get(self.reward.kind, 0.0)

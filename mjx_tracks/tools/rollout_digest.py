@@ -7,7 +7,8 @@ through the training wrappers (curriculum auto-reset included), hashed bit for b
 Each task runs N_ENVS robots for N_STEPS control steps from a fixed key, with actions ~ U(-1, 1)
 from that key, and episodes cut at EPISODE_STEPS steps so that the curriculum's reset runs inside
 the rollout. The digest is the SHA-256 of every step's observation, reward, done flag, metrics,
-positions (qpos) and scene (boxes, spawn, goal, parameters), as float32 bytes. A refactor that changes no behaviour keeps every digest.
+positions (qpos) and scene (boxes, spawn, goal, parameters), as float32 bytes. A refactor that changes no behaviour keeps every digest. Digests are
+compared on the platform they were recorded on (floating point differs between CPU and GPU).
 """
 
 from __future__ import annotations
@@ -65,6 +66,11 @@ def main(argv=None) -> int:
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   recorded = json.load(open(args.check)) if args.check else {}
+  here = f"{jax.devices()[0].platform} ({jax.devices()[0].device_kind})"
+  if args.check and recorded.get("device") != here:
+    print(f"error: {args.check} was recorded on {recorded.get('device')}, this is {here}: the digests are bit "
+          "for bit and differ between platforms; record one here with --write", file=sys.stderr)
+    return 2
   digests, differ = {}, []
   for task in args.tasks:
     digests[task] = rollout_digest(task)
@@ -73,7 +79,7 @@ def main(argv=None) -> int:
     print(f"{task:15s} {digests[task][:16]}{same}", file=sys.stderr, flush=True)
   if args.write:
     record = {"what": __doc__.split("\n\n")[0], "command": "python -m mjx_tracks.tools.rollout_digest --write " + args.write,
-              "device": f"{jax.devices()[0].platform} ({jax.devices()[0].device_kind})", "jax": jax.__version__,
+              "device": here, "jax": jax.__version__,
               "n_envs": N_ENVS, "n_steps": N_STEPS, "episode_steps": EPISODE_STEPS, "seed": SEED, "digests": digests}
     with open(args.write, "w") as f:
       json.dump(record, f, indent=1)
