@@ -8,7 +8,7 @@ import pytest
 from mjx_tracks.envs.config import load_config
 from scenes.kinds.stairs import EARLY_STOP_RETURN
 from train.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, EarlyStop, parse_early_stop
-from train.loop import Checkpointer, Loop
+from train.loop import Checkpointer, Loop, Schedule
 
 
 def test_criteria_parse_with_their_defaults_and_name_bad_input():
@@ -50,8 +50,9 @@ def _loop(probe_success, early, probe_every=300):
   update = lambda s: (s + 1, {"episode/sum_reward": 0.1, "episode/count": 1.0})
   ckpt = Checkpointer(None, {}, None, lambda step: None, every_s=1e9)
   reporter = FakeReporter()
-  loop = Loop(update, 100, ckpt, reporter, 100, types.SimpleNamespace(requested=None), early,
-              probe=lambda s: {"hardest/success_rate": next(successes)}, probe_every=probe_every)
+  probe = lambda s: {"hardest/success_rate": next(successes)}  # noqa: E731
+  loop = Loop(update, 100, ckpt, reporter, types.SimpleNamespace(requested=None),
+              Schedule(100, early, ((probe, probe_every),)))
   return loop, reporter
 
 
@@ -95,8 +96,7 @@ def test_time_of_updates_still_running_when_an_evaluation_starts_counts_as_train
   ckpt = Checkpointer(None, {}, None, lambda step: None, every_s=1e9)
   reporter = FakeReporter()
   probe = lambda s: (s.block_until_ready(), {"hardest/success_rate": 0.0})[1]  # waits like an evaluation
-  loop = Loop(update, 100, ckpt, reporter, 200, types.SimpleNamespace(requested=None), None,
-              probe=probe, probe_every=100)
+  loop = Loop(update, 100, ckpt, reporter, types.SimpleNamespace(requested=None), Schedule(200, None, ((probe, 100),)))
   loop.run(DispatchedState(), 0, 1_000)
   rates = [r["steps_per_s"] for r in reporter.rows if r["source"] == "train"]
   # 100 steps per >= 50 ms wait; the first window holds one wait (its second is the next one's)

@@ -65,22 +65,30 @@ def _agree(stop: bool, checkpoint: bool) -> tuple[bool, bool]:
   return bool(flags[:, 0].any()), bool(flags[0, 1])
 
 
+@dataclasses.dataclass(frozen=True)
+class Schedule:
+  """What happens between updates, and when (in environment steps)."""
+  report_every: int  # steps between progress reports
+  early_stop: EarlyStop | None = None
+  # (evaluate(state) -> metrics, every N steps): Brax's evaluator on uniform scenes, the hardest probe
+  evaluations: tuple[tuple[Callable, int], ...] = ()
+  milestones: tuple[int, ...] = ()  # budgets at which on_milestone(state, step, budget) runs
+  on_milestone: Callable | None = None
+
+
 class Loop:
   """Runs updates from a step until a total; see `run`."""
 
-  def __init__(self, update, steps_per_update: int, checkpointer: Checkpointer, reporter,
-               report_every: int, stop, early_stop: EarlyStop | None = None,
-               evaluate: Callable | None = None, eval_every: int | None = None,
-               probe: Callable | None = None, probe_every: int = 0,
-               milestones: tuple[int, ...] = (), on_milestone: Callable | None = None):
-    """on_milestone(state, step, budget): called at the first update at or past each milestone budget."""
+  def __init__(self, update, steps_per_update: int, checkpointer: Checkpointer, reporter, stop,
+               schedule: Schedule):
+    """update(state) -> (state, metrics); reporter(step, metrics) -> a report row; stop.requested:
+    not None once a stop was asked for."""
     self.update, self.spu = update, steps_per_update
-    self.milestones, self.on_milestone = milestones, on_milestone
+    self.milestones, self.on_milestone = schedule.milestones, schedule.on_milestone
     self.checkpointer, self.reporter, self.stop = checkpointer, reporter, stop
-    self.report_every = max(report_every, steps_per_update)
-    self.early = early_stop
-    # (evaluation, its cadence in steps): Brax's evaluator on uniform scenes, the hardest probe
-    self.evals = [(f, every) for f, every in ((evaluate, eval_every), (probe, probe_every)) if f and every]
+    self.report_every = max(schedule.report_every, steps_per_update)
+    self.early = schedule.early_stop
+    self.evals = [(f, every) for f, every in schedule.evaluations if f and every]
 
   def run(self, state, step: int, total: int) -> LoopResult:
     """Updates until `total` steps, an early stop or a stop request; the state at the end is

@@ -122,7 +122,7 @@ def finished_lines(plan: RunPlan, final: dict, db_path: str | None) -> str:
       + (f"; records in {db_path}" if db_path else ""),
       "next:",
       f"  python -m train.evaluate {out} --scene hardest --trials 10   # the policy on the task's hardest scene",
-      f"  python -m train.server --runs {os.path.dirname(out)}   # the dashboard, http://127.0.0.1:8000",
+      f"  python -m train.server --runs {os.path.dirname(out)}   # the dashboard (the [server] extra), http://127.0.0.1:8000",
       f"  python -c \"from train.policy import load_policy; act = load_policy('{out}/policy')\"   # act(obs) in Python"])
 
 

@@ -13,7 +13,7 @@ import jax
 from train.build import Training, build, compile_update, init_state, make_evaluator
 from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
 from train.evaluation import milestone_folder
-from train.loop import Checkpointer, Loop, LoopResult
+from train.loop import Checkpointer, Loop, LoopResult, Schedule
 from train.mesh import from_host, to_host
 from train.plan import RunError, RunPlan
 from train.probe import HardestProbe
@@ -75,9 +75,10 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) ->
                       wall_offset=db.wall_offset(plan.run_id, start_step))
   eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
   probe = HardestProbe(t) if plan.probe_every else None
-  loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, p.training_metrics_steps, stop,
-              plan.early_stop, _evaluator(t), eval_every, probe, plan.probe_every,
-              plan.milestones, lambda state, step, budget: _export(t, state, step, milestone_folder(budget)))
+  schedule = Schedule(p.training_metrics_steps, plan.early_stop,
+                      ((_evaluator(t), eval_every), (probe, plan.probe_every)), plan.milestones,
+                      lambda state, step, budget: _export(t, state, step, milestone_folder(budget)))
+  loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, stop, schedule)
   return loop, reporter
 
 
