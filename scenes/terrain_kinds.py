@@ -26,6 +26,10 @@ class TerrainParams:
   def unit(self, name: str) -> str:
     return self.units[self.names.index(name)] if self.units else "m"
 
+  def hardest(self, range_of: Callable[[str], tuple[float, float]]) -> list[float]:
+    """Each parameter at the hard end of its (min, max) range, range_of(name)."""
+    return [range_of(n)[end == "high"] for n, end in zip(self.names, self.hard)]
+
 
 STAIRS = TerrainParams(("tread", "riser", "steps"), ("low", "high", "high"),  # hardest: short, tall, many
                        (TREAD_LIMITS, RISER_LIMITS, (1, MAX_STEPS)), (False, False, True), units=("m", "m", ""))

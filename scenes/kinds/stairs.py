@@ -32,7 +32,7 @@ class Stairs(SceneKind):
   def pinned(self, cfg, scene: str):
     from mjx_tracks.envs.config import ConfigError  # noqa: PLC0415
     if scene == "hardest":  # each parameter at its hard end: n = n_max, l = l_min, h = h_max
-      return _pinned(cfg, [getattr(cfg.scene, n)[end == "high"] for n, end in zip(STAIRS.names, STAIRS.hard)])
+      return _pinned(cfg, STAIRS.hardest(lambda n: getattr(cfg.scene, n)))
     if scene.startswith(HELD_OUT):
       named = {h.name: h for h in cfg.evaluation.held_out}
       h = named.get(scene[len(HELD_OUT):])

@@ -20,8 +20,8 @@ def pinned_terrain(cfg, kind: str, values):
 def hardest_terrain(cfg, kinds: tuple[str, ...]):
   """The task drawing the given kinds, each with every parameter at its hard end."""
   for kind in kinds:
-    ranges, p = getattr(cfg.scene.terrain, kind), TERRAIN_PARAMS[kind]
-    cfg = pinned_terrain(cfg, kind, [getattr(ranges, n)[end == "high"] for n, end in zip(p.names, p.hard)])
+    ranges = getattr(cfg.scene.terrain, kind)
+    cfg = pinned_terrain(cfg, kind, TERRAIN_PARAMS[kind].hardest(lambda n, r=ranges: getattr(r, n)))
   return replace_scene(cfg, terrains=kinds)
 
 

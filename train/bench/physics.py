@@ -7,7 +7,8 @@ n ~ U{1..7}) and drives toward it at 0.5 m/s with random flipper targets ~ U(-0.
 from __future__ import annotations
 
 import json
-import time
+
+from train.bench.timing import timed
 
 
 def add_args(p) -> None:
@@ -36,19 +37,6 @@ def batch_state(sim, n_envs: int, key):
   return jax.jit(jax.vmap(one))(stairs)
 
 
-def time_fn(fn, args, reps: int):
-  """(compile s, s per call) of out = fn(*args[:-1], out), the first call timed alone."""
-  import jax  # noqa: PLC0415
-  t = time.time()
-  out = jax.block_until_ready(fn(*args))
-  compile_s = time.time() - t
-  t = time.time()
-  for _ in range(reps):
-    out = fn(*args[:-1], out)
-  jax.block_until_ready(out)
-  return compile_s, (time.time() - t) / reps
-
-
 def run(args) -> tuple[list[dict], dict]:
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
@@ -73,7 +61,8 @@ def run(args) -> tuple[list[dict], dict]:
     targets = jax.random.uniform(jax.random.PRNGKey(1), (n, sim.layout.n_joints), minval=-0.5, maxval=0.5)
     row = {"envs": n, "substeps_per_control_step": k}
     for name, fn in (("tracks", tracks), ("plain_mjx_step", plain)):
-      compile_s, per_call = time_fn(jax.jit(jax.vmap(fn)), (m, belts, targets, d), args.reps)
+      vf = jax.jit(jax.vmap(fn))
+      compile_s, per_call = timed(lambda data, vf=vf: vf(m, belts, targets, data), d, lambda i: (), args.reps)
       row.update({f"{name}_compile_s": round(compile_s, 2), f"{name}_substeps_per_s": round(n * k / per_call),
                   f"{name}_control_steps_per_s": round(n / per_call)})
     row["track_model_overhead"] = round(row["plain_mjx_step_substeps_per_s"] / row["tracks_substeps_per_s"] - 1, 3)
