@@ -5,30 +5,18 @@ After `import mjx_tracks`, every task in configs/ is registered with Gymnasium a
 returns the task's Brax environment.
 """
 
-import contextlib
 import ctypes.util
-import io
 import os
-import sys
 
 # Offscreen rendering needs its GL backend chosen before mujoco is first imported: EGL where
 # the machine has it and no display (a GPU host without libEGL keeps mujoco's default).
 if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY") and ctypes.util.find_library("EGL"):
   os.environ["MUJOCO_GL"] = "egl"
 
-
-def _import_mjx_quietly() -> None:
-  """mujoco.mjx prints "Failed to import warp" lines when its optional Warp backend is absent; it
-  is not used here (DESIGN: the JAX backend), so those lines are dropped and any other kept."""
-  printed = io.StringIO()
-  with contextlib.redirect_stdout(printed):
-    import mujoco.mjx  # noqa: F401,PLC0415
-  for line in printed.getvalue().splitlines():
-    if not line.startswith(("Failed to import warp", "Failed to import mujoco_warp")):
-      print(line, file=sys.stdout)
+from mjx_tracks import quiet_mjx  # noqa: E402
 
 
-_import_mjx_quietly()
+quiet_mjx.install()  # mujoco.mjx, whoever imports it first, without the Warp lines
 
 
 def load(task: str, overrides=()):

@@ -20,7 +20,33 @@ def enable() -> pathlib.Path:
   jax.config.update("jax_compilation_cache_dir", str(path))
   jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
   jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+  if os.environ.get("MJX_TRACKS_COMPILE_LOG"):
+    log_compilations(os.environ["MJX_TRACKS_COMPILE_LOG"])
   return path
+
+
+_COMPILE_EVENTS = ("Finished ", "Persistent compilation cache hit", "Persistent compilation cache miss")
+
+
+def log_compilations(path: str) -> None:
+  """Appends every XLA compilation (seconds) and persistent-cache hit or miss of this process to
+  `path`, one line each with the pid and the pytest test running (its env var reaches the
+  subprocesses a test starts): where a test suite's time goes ($MJX_TRACKS_COMPILE_LOG)."""
+  import logging  # noqa: PLC0415
+
+  class _Events(logging.Handler):
+    def emit(self, record: logging.LogRecord) -> None:
+      msg = record.getMessage()
+      if msg.startswith(_COMPILE_EVENTS):
+        test = os.environ.get("PYTEST_CURRENT_TEST", "-").split(" ")[0]
+        with open(path, "a") as f:
+          f.write(f"{os.getpid()}\t{test}\t{msg[:200]}\n")
+
+  for name in ("jax._src.dispatch", "jax._src.compiler"):
+    logger = logging.getLogger(name)
+    if not any(type(h).__name__ == "_Events" for h in logger.handlers):
+      logger.setLevel(logging.DEBUG)
+      logger.addHandler(_Events(logging.DEBUG))
 
 
 def _times_path() -> pathlib.Path:

@@ -2,6 +2,7 @@
 simulators."""
 
 import os
+import pathlib  # noqa: F401  (a type in a hint)
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 
@@ -33,3 +34,50 @@ def absolem_stairs(default_physics):
   from mjx_tracks.robots import get_robot
   from mjx_tracks.sim.simulator import staircase_simulator
   return staircase_simulator(get_robot(2), default_physics)
+
+
+def _session_folder(tmp_path_factory) -> "pathlib.Path":
+  """A folder every pytest-xdist worker of this session shares (the session's own without xdist)."""
+  base = tmp_path_factory.getbasetemp()
+  return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+@pytest.fixture(scope="session")
+def ppo_run(tmp_path_factory):
+  """The session's one tiny PPO run (2,048 steps, a checkpoint after every 512-step update, a
+  milestone at 1,024, the hardest probe at the end, one held-out staircase): made once by whichever
+  worker asks first, under a file lock, and read by the test files of every worker. Tests copy it
+  before changing it. Returns (run directory, database)."""
+  import contextlib
+  import fcntl
+  import io
+  from helpers import HELD_OUT, TINY
+  from train import run
+  root = _session_folder(tmp_path_factory) / "ppo-run"
+  out, database, said = root / "ppo", root / "db.sqlite", root / "ppo.stdout"
+  root.mkdir(exist_ok=True)
+  with open(root / "lock", "w") as lock:
+    fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+    if (root / "failed").exists():
+      pytest.fail(f"the shared PPO run failed in another worker: {(root / 'failed').read_text()[-2000:]}")
+    if not said.exists():
+      with contextlib.redirect_stdout(io.StringIO()) as printed:
+        rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", str(out),
+                       "--db", str(database), "--probe-every", "2048", "--milestones", "1024",
+                       "--checkpoint-every", "0", "--keep-checkpoints", "4", *TINY, "--set",
+                       f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"])
+      if rc != 0:
+        (root / "failed").write_text(printed.getvalue())
+        pytest.fail(f"the shared PPO run exited {rc}: {printed.getvalue()[-2000:]}")
+      said.write_text(printed.getvalue())  # what the command printed, for the test of its last lines
+  return str(out), str(database)
+
+
+# Files that compile the most start first (pytest-xdist hands files out in collection order): the
+# shared PPO run is made early, and no long file starts last while the other worker idles.
+FIRST = ("test_training.py", "test_env.py", "test_training_sac.py", "test_brax_reference.py", "test_evaluator.py")
+
+
+def pytest_collection_modifyitems(items):
+  rank = lambda item: FIRST.index(item.path.name) if item.path.name in FIRST else len(FIRST)
+  items.sort(key=rank)  # stable: each file's tests keep their order

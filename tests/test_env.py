@@ -16,8 +16,11 @@ from mjx_tracks.envs.config import available_tasks, load_config
 from mjx_tracks.envs.task_env import METRICS
 from mjx_tracks.envs.wrappers import batched_env
 
-N_ENVS = 2
-N_TERRAIN_ENVS, TERRAIN_SEED = 16, 4  # the mixed terrain task's reset: every kind drawn (checked)
+N_ENVS = 2  # robots of a compiled task, but:
+# asc-inc-cog's is the Gymnasium Env's batch, so that its test loads these programs from the
+# persistent cache; the mixed terrain task's reset draws every kind (checked) from that many
+TASK_ENVS = {"asc-inc-cog": 1, "mixed-terrain": 16}
+TERRAIN_SEED = 4
 # compiled and stepped: one per direction, scene kind, robot and terrain world (the corridor's, the
 # spirals' in the open); between them they run every sampler, reward kind, direction and terrain
 # kind (the mixed task draws each corridor kind; spiral-down differs from spiral-up in its kind
@@ -31,9 +34,11 @@ SIZE_KEYS = {"scene.steps", "scene.nav_floor_obstacles"}
 
 @functools.lru_cache(maxsize=None)
 def _compiled(task: str):
+  """(core, batched env, reset(keys), step, robots): the programs the Gymnasium stack compiles."""
   core = mjx_tracks.load(task)
   env = batched_env(core)
-  return core, env, jax.jit(env.reset), jax.jit(env.step)
+  reset_with = jax.jit(env.reset_with)
+  return core, env, lambda keys: reset_with(keys, env.initial_stats()), jax.jit(env.step), TASK_ENVS.get(task, N_ENVS)
 
 
 def _flat(d: dict, prefix: str = "") -> dict:
@@ -63,9 +68,8 @@ def test_every_other_task_differs_from_a_run_task_only_in_keys_the_run_tasks_exe
 
 @pytest.mark.parametrize("task", RUN_TASKS)
 def test_task_jits_reset_and_ten_steps_with_finite_observations(task):
-  core, _, reset, step = _compiled(task)
+  core, _, reset, step, n = _compiled(task)
   terrain = core.cfg.scene.kind == "terrain"
-  n = N_TERRAIN_ENVS if terrain else N_ENVS
   s = reset(jax.random.split(jax.random.PRNGKey(TERRAIN_SEED if terrain else 0), n))
   assert s.obs.shape == (n, core.observation_size)
   if terrain:
@@ -88,9 +92,9 @@ def _upside_down(state):
 
 
 def test_tip_over_terminates_with_penalty():
-  core, _, reset, step = _compiled("asc-inc-cog")
-  s = _upside_down(reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS)))
-  s = step(s, jnp.zeros((N_ENVS, core.action_size)))
+  core, _, reset, step, n = _compiled("asc-inc-cog")
+  s = _upside_down(reset(jax.random.split(jax.random.PRNGKey(0), n)))
+  s = step(s, jnp.zeros((n, core.action_size)))
   assert np.asarray(s.done).all()
   assert not np.asarray(s.info["truncation"]).any()
   assert np.asarray(s.metrics["tipped_over"]).all()
@@ -98,24 +102,24 @@ def test_tip_over_terminates_with_penalty():
 
 
 def test_time_limit_truncates_and_does_not_terminate():
-  core, _, reset, step = _compiled("asc-inc-cog")
-  s = reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
-  s.info["steps"] = jnp.full(N_ENVS, core.cfg.episode.max_steps - 1.0)
-  s = step(s, jnp.zeros((N_ENVS, core.action_size)))
+  core, _, reset, step, n = _compiled("asc-inc-cog")
+  s = reset(jax.random.split(jax.random.PRNGKey(0), n))
+  s.info["steps"] = jnp.full_like(s.info["steps"], core.cfg.episode.max_steps - 1.0)  # not weakly typed: no new trace
+  s = step(s, jnp.zeros((n, core.action_size)))
   assert np.asarray(s.done).all()
   assert np.asarray(s.info["truncation"]).all()  # ended by the limit, not by the task
   assert not np.asarray(s.metrics["tipped_over"]).any()
 
 
 def test_finished_episodes_restart_on_a_new_scene():
-  core, _, reset, step = _compiled("nav")  # a run task (compiled once) whose uniform sampler redraws at any eps
-  s = reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
+  core, _, reset, step, n = _compiled("nav")  # a run task (compiled once) whose uniform sampler redraws at any eps
+  s = reset(jax.random.split(jax.random.PRNGKey(0), n))
   before = np.asarray(s.pipeline_state.scene.xi)
   s = _upside_down(s)
-  s = step(s, jnp.zeros((N_ENVS, core.action_size)))
+  s = step(s, jnp.zeros((n, core.action_size)))
   after = np.asarray(s.pipeline_state.scene.xi)
   assert not np.allclose(before, after)
-  assert np.asarray(s.info["global"].curriculum.finished)[0] == N_ENVS
+  assert np.asarray(s.info["global"].curriculum.finished)[0] == n
   scene = s.pipeline_state.scene
   spawn, yaw = np.asarray(scene.spawn_pos), np.asarray(scene.spawn_yaw)
   np.testing.assert_allclose(np.asarray(s.pipeline_state.data.qpos[:, :2]), spawn[:, :2], atol=1e-6)
@@ -125,45 +129,47 @@ def test_finished_episodes_restart_on_a_new_scene():
 
 def test_unfinished_environments_are_untouched_by_the_auto_reset():
   """Env 0 tips over and is reset; env 1 ends in exactly the state it reaches when env 0 does not."""
-  core, env, reset, step = _compiled("asc-inc-cog")
-  s = reset(jax.random.split(jax.random.PRNGKey(2), N_ENVS))
+  core, env, reset, step, n = _compiled("nav")
+  s = reset(jax.random.split(jax.random.PRNGKey(2), n))
   keep = lambda a, b: jnp.concatenate([a[:1], b[1:]])  # env 0 tipped, env 1 as it was
   mixed = s.replace(pipeline_state=jax.tree_util.tree_map(keep, _upside_down(s).pipeline_state, s.pipeline_state))
-  action = jnp.full((N_ENVS, core.action_size), 0.3)
+  action = jnp.full((n, core.action_size), 0.3, jnp.float32)  # not weakly typed: no new trace
   after, reference = step(mixed, action), step(s, action)
   assert np.asarray(after.done).tolist() == [1.0, 0.0] and not np.asarray(reference.done).any()
   for a, b in zip(jax.tree_util.tree_leaves(after.pipeline_state), jax.tree_util.tree_leaves(reference.pipeline_state)):
     np.testing.assert_array_equal(np.asarray(a)[1], np.asarray(b)[1])
   np.testing.assert_array_equal(np.asarray(after.obs)[1], np.asarray(reference.obs)[1])
-  spawn = np.asarray(after.pipeline_state.scene.spawn_pos)[0]
+  scene = after.pipeline_state.scene
+  spawn, yaw = np.asarray(scene.spawn_pos)[0], float(np.asarray(scene.spawn_yaw)[0])
   np.testing.assert_allclose(np.asarray(after.pipeline_state.data.qpos)[0, :2], spawn[:2], atol=1e-6)
-  np.testing.assert_allclose(np.asarray(after.pipeline_state.data.qpos)[0, 3:7], [1, 0, 0, 0], atol=1e-6)
+  upright = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]  # at the new scene's spawn, upright
+  np.testing.assert_allclose(np.asarray(after.pipeline_state.data.qpos)[0, 3:7], upright, atol=1e-6)
 
 
 def test_a_physics_blow_up_ends_the_episode_and_is_counted():
   """Velocities of 1e30 m/s make the integration overflow: the step keeps the last finite state,
   ends the episode and counts it in physics_nan, with finite observations and rewards."""
-  core, _, reset, step = _compiled("asc-inc-cog")
-  s = reset(jax.random.split(jax.random.PRNGKey(3), N_ENVS))
+  core, _, reset, step, n = _compiled("asc-inc-cog")
+  s = reset(jax.random.split(jax.random.PRNGKey(3), n))
   es = s.pipeline_state
   s = s.replace(pipeline_state=es.replace(data=es.data.replace(qvel=jnp.full_like(es.data.qvel, 1e30))))
-  s = step(s, jnp.zeros((N_ENVS, core.action_size)))
-  assert np.asarray(s.metrics["physics_nan"]).tolist() == [1.0] * N_ENVS
+  s = step(s, jnp.zeros((n, core.action_size)))
+  assert np.asarray(s.metrics["physics_nan"]).tolist() == [1.0] * n
   assert np.asarray(s.done).all() and not np.asarray(s.info["truncation"]).any()
   assert np.isfinite(np.asarray(s.info["final_obs"])).all() and np.isfinite(np.asarray(s.reward)).all()
-  assert int(np.asarray(s.info["global"].curriculum.finished)[0]) == N_ENVS
+  assert int(np.asarray(s.info["global"].curriculum.finished)[0]) == n
 
 
 def test_navigation_ends_at_the_goal_and_when_moving_away():
   """Env 0 is put on its goal; env 1's start distance is shrunk to 0.5 m, so where it stands it is
   more than 1.2 start distances from the goal."""
-  core, _, reset, step = _compiled("nav")
-  s = reset(jax.random.split(jax.random.PRNGKey(4), N_ENVS))
+  core, _, reset, step, n = _compiled("nav")
+  s = reset(jax.random.split(jax.random.PRNGKey(4), n))
   es = s.pipeline_state
   goal = np.asarray(es.scene.goal)
   q = es.data.qpos.at[0, :2].set(goal[0, :2])
   es = es.replace(data=es.data.replace(qpos=q), d0=es.d0.at[1].set(0.5), closest=es.closest.at[1].set(0.5))
-  s = step(s.replace(pipeline_state=es), jnp.zeros((N_ENVS, core.action_size)))
+  s = step(s.replace(pipeline_state=es), jnp.zeros((n, core.action_size)))
   assert np.asarray(s.done).tolist() == [1.0, 1.0]
   assert np.asarray(s.metrics["goal_reached"]).tolist() == [1.0, 0.0]
   assert np.asarray(s.metrics["moved_away"]).tolist() == [0.0, 1.0]
@@ -171,19 +177,19 @@ def test_navigation_ends_at_the_goal_and_when_moving_away():
 
 
 def test_the_spawn_is_off_the_stairs_and_the_cog_term_waits_for_them():
-  core, _, reset, step = _compiled("asc-inc-cog")
-  s = step(reset(jax.random.split(jax.random.PRNGKey(5), N_ENVS)), jnp.zeros((N_ENVS, core.action_size)))
-  assert np.asarray(s.metrics["on_stairs"]).tolist() == [0.0] * N_ENVS  # spawned 1 m before the first riser
-  assert np.asarray(s.metrics["cog_deviation"]).tolist() == [0.0] * N_ENVS
+  core, _, reset, step, n = _compiled("asc-inc-cog")
+  s = step(reset(jax.random.split(jax.random.PRNGKey(5), n)), jnp.zeros((n, core.action_size)))
+  assert np.asarray(s.metrics["on_stairs"]).tolist() == [0.0] * n  # spawned 1 m before the first riser
+  assert np.asarray(s.metrics["cog_deviation"]).tolist() == [0.0] * n
 
 
 def test_observation_parts_read_their_sources():
   """Each part of the paper's stair observation against where it comes from."""
   from mjx_tracks.envs.beams import depth_beams
   from mjx_tracks.sim.pose import chassis_rpy
-  core, _, reset, step = _compiled("asc-inc-cog")
-  s = reset(jax.random.split(jax.random.PRNGKey(6), N_ENVS))
-  s = step(s, jnp.tile(jnp.array([1.0, 0.6, -0.4, 0.5, -0.5]), (N_ENVS, 1)))
+  core, _, reset, step, n = _compiled("asc-inc-cog")
+  s = reset(jax.random.split(jax.random.PRNGKey(6), n))
+  s = step(s, jnp.tile(jnp.array([1.0, 0.6, -0.4, 0.5, -0.5]), (n, 1)))
   obs, es = np.asarray(s.obs[0]), jax.tree_util.tree_map(lambda x: x[0], s.pipeline_state)
   sizes = core.part_sizes
   offsets = np.cumsum([0] + [sizes[p] for p in core.cfg.observation.parts])

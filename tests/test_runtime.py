@@ -12,7 +12,7 @@ import time
 import numpy as np
 import pytest
 
-from helpers import TINY, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
+from helpers import TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
 from train import db as dbmod
 from train.checkpoints import RunCheckpoints
 
@@ -120,7 +120,7 @@ def _two_processes(out: str, database: str) -> list:
   with socket.socket() as sock:
     sock.bind(("localhost", 0))
     port = sock.getsockname()[1]
-  return [start_training([*TRAIN_TINY, *EVERY_CONTACT, "--steps", "512", "--out", out, "--db", database,
+  return [start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database,
                           "--coordinator", f"localhost:{port}", "--num-processes", "2", "--process-id", str(i)],
                          f"{out}.p{i}.log") for i in (0, 1)]
 
@@ -143,44 +143,29 @@ def _runs_match(a: str, b: str, step: int, name: str) -> None:
       np.testing.assert_array_equal(other[k], one[k], err_msg=f"{name}: {k}")
 
 
-# Device-count comparisons keep every contact: contact culling picks the nearest contacts with
-# top_k, a discontinuity that grows the devices' float summation-order differences past the
-# tolerance of _runs_match within 512 training steps (one parameter in 320 off by 0.006).
-EVERY_CONTACT = ["--set", "physics.contact_slots=-1", "--set", "physics.box_pairs=-1"]
-
-
 def _start_tiny_run(out: str, database: str, devices: int):
-  return start_training([*TRAIN_TINY, *EVERY_CONTACT, "--steps", "512", "--out", out, "--db", database],
+  """The ppo_run fixture's training (its first update) on `devices` CPU devices."""
+  return start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database],
                         out + ".log", {"XLA_FLAGS": f"--xla_force_host_platform_device_count={devices}"})
 
 
-def _check_tiny_run(out: str, devices: int, proc) -> None:
+def test_two_cpu_devices_train_like_one(ppo_run, tmp_path):
+  """The session's tiny run (1 CPU device) and its first update on a mesh of 2 devices."""
+  out = str(tmp_path / "d2")
+  proc = _start_tiny_run(out, str(tmp_path / "db.sqlite"), 2)
   assert proc.wait(600) == 0, open(out + ".log").read()[-2000:]
-  assert f"on {devices} x cpu" in open(out + ".log").read()
-
-
-def _tiny_run(out: str, database: str, devices: int) -> None:
-  _check_tiny_run(out, devices, _start_tiny_run(out, database, devices))
-
-
-def test_two_cpu_devices_train_like_one(tmp_path):
-  """The same run on 1 CPU device and on a mesh of 2 (side by side: each compiles on its own core)."""
-  database = str(tmp_path / "db.sqlite")
-  runs = [(str(tmp_path / f"d{n}"), n, _start_tiny_run(str(tmp_path / f"d{n}"), database, n)) for n in (1, 2)]
-  for out, devices, proc in runs:
-    _check_tiny_run(out, devices, proc)
-  _runs_match(str(tmp_path / "d1"), str(tmp_path / "d2"), 512, "2 devices")
+  assert "on 2 x cpu" in open(out + ".log").read()
+  _runs_match(ppo_run[0], out, 512, "2 devices")
 
 
 @pytest.mark.distributed
-def test_two_processes_train_like_one_device(tmp_path):
+def test_two_processes_train_like_one_device(ppo_run, tmp_path):
   """The same run as 2 jax.distributed processes of one CPU device each (coordinator on
   localhost), which train one policy; process 1 keeps no records."""
   database = str(tmp_path / "db.sqlite")
-  _tiny_run(str(tmp_path / "d1"), database, 1)
   out = str(tmp_path / "p2")
   procs = _two_processes(out, database)
   assert [p.wait(600) for p in procs] == [0, 0], open(out + ".p0.log").read()[-2000:]
   assert "on 2 x cpu, 2 processes" in open(out + ".p0.log").read()
-  _runs_match(str(tmp_path / "d1"), out, 512, "2 processes")
-  assert len(dbmod.ExperimentDB(database).runs()) == 2
+  _runs_match(ppo_run[0], out, 512, "2 processes")
+  assert len(dbmod.ExperimentDB(database).runs()) == 1

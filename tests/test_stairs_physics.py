@@ -64,7 +64,7 @@ def _assert_culling_keeps_every_touch(setup: DriveSetup, qpos: np.ndarray) -> No
 
 
 def test_random_actions_on_stairs_stay_finite_and_within_limits(jaguar_stairs):
-  """10,000 physics steps (1,000 control steps x 10) of random 8-DOF increments, some NaN."""
+  """3,000 physics steps (300 control steps x 10, 30 s) of random 8-DOF increments, some NaN."""
   sim = jaguar_stairs
   ctl = Controller.create(sim.robot, "8dof", increments=True, v_range=(-1.0, 1.0))
   stairs = sc.Staircase(jnp.float32(0.35), jnp.float32(0.22), jnp.int32(7))
@@ -82,7 +82,7 @@ def test_random_actions_on_stairs_stay_finite_and_within_limits(jaguar_stairs):
     q = d.qpos[sim.layout.joint_qpos]
     return (d, targets), (jnp.all(jnp.isfinite(d.qpos)) & jnp.all(jnp.isfinite(d.qvel)), q)
 
-  keys = jax.random.split(jax.random.PRNGKey(0), 1000)
+  keys = jax.random.split(jax.random.PRNGKey(0), 300)
   _, (finite, joints) = jax.jit(lambda d: jax.lax.scan(body, (d, jnp.zeros(6)), keys))(d0)
   assert bool(np.all(finite))
   lim = sim.layout.joint_limits

@@ -22,6 +22,8 @@ def test_the_grid_has_one_run_per_group_task_budget_and_seed():
   assert len(runs) == 2 * 3 * (2 + 1) and len({c.id for c in runs}) == len(runs)
   assert {(c.group, c.steps) for c in runs} == {("ppo", 512), ("ppo", 1024), ("sac", 64)}
   assert spec.retries == 1 and spec.eval_trials == 100  # the defaults
+  one = study_from_dict({**STUDY, "groups": [GROUP, {**GROUP, "name": "inc", "tasks": ["asc-inc-cog"]}]})
+  assert [c.task for c in cells(one) if c.group == "inc"] == ["asc-inc-cog"] * 2 * 3  # a group's own tasks
 
 
 def test_a_run_plans_like_its_command_line(tmp_path):
@@ -48,6 +50,8 @@ def test_a_run_plans_like_its_command_line(tmp_path):
     ({"name": "study\n"}, "not a plain name"),  # a trailing newline
     ({"tasks": ["nope"], "compare": [["nope", "asc-inc-cog"]]}, "unknown task 'nope'"),  # not a compare error
     ({"groups": [GROUP, GROUP]}, "group names repeat"),
+    ({"groups": [{**GROUP, "tasks": ["nav"]}]}, r"groups\[0\].tasks: distinct tasks of the study's tasks"),
+    ({"groups": [{**GROUP, "tasks": ["asc-inc-cog"] * 2}]}, r"groups\[0\].tasks: distinct"),
     ({"groups": [{**GROUP, "set": ["reward.cog_scal=1"]}]}, r"groups\[0\] \(ppo\) on asc-inc-cog: reward.cog_scal: unknown key"),
     ({"tasks": ["nav"], "groups": [{**GROUP, "early_stop": "success"}]}, "nav has no hardest configuration"),
     ({"groups": [{**GROUP, "budgets": "some"}]}, r"groups\[0\].budgets: one of"),
@@ -62,6 +66,8 @@ def test_bad_studies_fail_naming_the_fault(change, words):
 
 
 def test_the_shipped_studies_validate_and_the_command_lists_their_runs(capsys):
+  assert all(cells(load_study(str(path))) for path in STUDIES.glob("*.yaml"))
+  assert len(cells(load_study("curricula"))) == 3 * (2 + 1 + 1)  # the variant groups train asc-inc-cog only
   paper = cells(load_study("paper"))  # a shipped study by name
   assert len(paper) == 4 * 5 * 3  # SAC with and without early stop; PPO's 4 budgets: milestones of one run
   ppo = [c for c in paper if c.group == "ppo"]

@@ -1,8 +1,6 @@
 """Training end to end on the CPU: a tiny PPO run, resume, export -> load -> act, evaluation
 report, experiment database, bad input (SAC: test_training_sac.py)."""
 
-import contextlib
-import io
 import glob
 import json
 import multiprocessing
@@ -13,32 +11,15 @@ import jax
 import numpy as np
 import pytest
 
-from helpers import TINY, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
+from helpers import HELD_OUT, TINY_SETTINGS, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
 from train import db as dbmod
 from train import evaluate, run
 from train.checkpoints import RunCheckpoints
 
 
-HELD_OUT = "middle"  # the fixture's one held-out staircase
-
-
-@pytest.fixture(scope="module")
-def ppo_run(tmp_path_factory):
-  root = tmp_path_factory.mktemp("runs")
-  out, database = str(root / "ppo"), str(root / "db.sqlite")
-  with contextlib.redirect_stdout(io.StringIO()) as said:
-    rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", out,
-                   "--db", database, "--probe-every", "2048", "--milestones", "1024", *TINY,
-                   "--set", f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"])
-  assert rc == 0
-  with open(out + ".stdout", "w") as f:  # what the command printed, for the test of its last lines
-    f.write(said.getvalue())
-  return out, database
-
-
 def test_the_main_command_ends_saying_what_it_made_and_what_to_run_next(ppo_run):
   out, database = ppo_run
-  said = open(out + ".stdout").read()
+  said = open(os.path.join(os.path.dirname(out), "ppo.stdout")).read()
   tail = said[said.index("\ndone: 2,048 steps"):]
   assert f"made: {out}/ with policy/" in tail and database in tail
   assert f"python -m train.evaluate {out} --scene hardest" in tail and "python -m train.server" in tail
@@ -72,8 +53,7 @@ def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
   params = serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
   reference = spec.make_inference_fn()(params, deterministic=True)
   act = load_policy(os.path.join(out, "policy"))
-  env = mjx_tracks.load("asc-inc-cog", ["observation.parts=[v, flippers_paired, arm, pitch]",
-                                         "episode.max_steps=8"])
+  env = mjx_tracks.load("asc-inc-cog", TINY_SETTINGS)
   obs = jax.vmap(env.reset)(jax.random.split(jax.random.PRNGKey(0), 5)).obs
   a = np.asarray(act(obs))
   np.testing.assert_allclose(a, np.asarray(reference(obs, jax.random.PRNGKey(1))[0]), atol=1e-6)
@@ -230,6 +210,7 @@ def test_the_suite_evaluates_every_scene_at_every_milestone_with_its_own_policy(
   shutil.copytree(out, run_dir)
   dbmod.ExperimentDB(database).import_runs(os.path.join(os.path.dirname(out), "db.sqlite"))
   assert load_policy_info(os.path.join(run_dir, "milestones", "1024"))["step"] == 1024
+  # 2 trials (100 robots of every contact cost more to run on 2 cores than a compilation)
   assert evaluate.main([run_dir, "--suite", "--milestones", "--trials", "2", "--db", database]) == 0
   assert evaluate.main([run_dir, "--scene", "hardest", "--milestones", "--trials", "2", "--db", database]) == 0
   scenes = ["hardest", "uniform", f"held-out/{HELD_OUT}"]
@@ -386,8 +367,8 @@ def test_a_run_made_from_the_dashboard_form_trains_for_real(ppo_run, tmp_path):
       page = p.chromium.launch(executable_path=chromium(), headless=True, args=["--no-sandbox"]).new_page()
       page.goto(f"{base}/new")
       page.wait_for_selector("#f-episode--max_steps")
-      for field, value in (("#steps", "1024"), ("#eval_trials", "0"), ("#f-episode--max_steps", "8"),
-                           ("#f-observation--parts", "[v, flippers_paired, arm, pitch]")):
+      tiny = [("#f-" + key.replace(".", "--"), value) for key, value in (s.split("=", 1) for s in TINY_SETTINGS)]
+      for field, value in (("#steps", "1024"), ("#eval_trials", "0"), *tiny):
         page.fill(field, value)
       page.click("#launch")
       page.wait_for_function("document.getElementById('result').textContent.startsWith('queued')")

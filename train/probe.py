@@ -1,14 +1,14 @@
 """The in-training evaluation on the hardest staircase: the very trials of `python -m train.evaluate
-RUN --scene hardest` (same reset keys, deterministic policy), compiled once and run between
-updates on the current parameters, so an early stop on its success is the final evaluation's."""
+RUN --scene hardest` (the same compiled program: same reset keys, deterministic policy), compiled
+once and run between updates on the current parameters, so an early stop on its success is the
+final evaluation's (and the evaluation finds the program in the persistent compilation cache)."""
 
 from __future__ import annotations
 
-import jax
 import numpy as np
 
 from mjx_tracks.metrics import REPORT_COLUMN as COLUMNS  # per-trial figure -> report column
-from train.evaluation import EVAL_EPS, EVAL_TRIALS, per_trial_figures, scene_config, trial_keys, trial_rollout
+from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_config, trial_runner
 from train.mesh import to_host
 from train.policy import act_from_params
 
@@ -19,11 +19,9 @@ class HardestProbe:
   """probe(state) -> {hardest/<column>: mean over the trials} for a learner state."""
 
   def __init__(self, t, trials: int = EVAL_TRIALS):
-    policy_params = t.learner.policy_params
-    _, rollout = trial_rollout(scene_config(t.plan.cfg, "hardest"), act_from_params(t.spec), trials, EVAL_EPS)
-    keys = trial_keys(trials)
-    self._run = jax.jit(lambda state: rollout(policy_params(state), keys)[0])
+    self._params = t.learner.policy_params
+    self._run = trial_runner(scene_config(t.plan.cfg, "hardest"), act_from_params(t.spec), trials, EVAL_EPS, EVAL_SEED)
 
   def __call__(self, state) -> dict[str, float]:
-    fig = per_trial_figures(to_host(self._run(state)))
+    fig, _, _ = self._run(to_host(self._params(state)))
     return {PREFIX + column: float(np.mean(fig[name])) for name, column in COLUMNS.items()}

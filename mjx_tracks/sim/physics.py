@@ -9,7 +9,6 @@ import mujoco
 from mjx_tracks.bounds import bound, violation
 from mjx_tracks.robots.mjcf import actuators_xml, robot_body_xml
 from mjx_tracks.robots.spec import RobotSpec
-from mjx_tracks.sim import mjx_private
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,5 +64,6 @@ def compile_model(robot: RobotSpec, world: str, physics: PhysicsConfig) -> mujoc
   """Compiles the MJCF into a MuJoCo model and checks what the track model's step assumes."""
   physics.validate()
   m = mujoco.MjModel.from_xml_string(build_mjcf(robot, world, physics))
+  from mjx_tracks.sim import mjx_private  # noqa: PLC0415  (mujoco.mjx and JAX: not for reading a config)
   mjx_private.check_model(m)
   return m

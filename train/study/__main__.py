@@ -15,7 +15,7 @@ import sys
 from mjx_tracks.envs.config import ConfigError
 from train.study.cluster import add_cluster_args
 from train.study.executor import STUDY_DB, cell_folder_of
-from train.study.spec import cells, load_study, runs_of
+from train.study.spec import cells, group_tasks, load_study, runs_of
 
 
 def parser() -> argparse.ArgumentParser:
@@ -56,9 +56,9 @@ def main(argv=None) -> int:
   if not args.plan:
     return _run(spec, folder, args)
   runs = cells(spec)
-  per = ", ".join(f"{g.name} {len(runs_of(g))}" for g in spec.groups)
-  print(f"study {spec.name}: {len(runs)} runs = {len(spec.tasks)} tasks x {len(spec.seeds)} seeds x runs "
-        f"per group ({per}); retries per run: {spec.retries} -> {folder}")
+  per = ", ".join(f"{g.name}: {len(group_tasks(spec, g))} tasks x {len(runs_of(g))}" for g in spec.groups)
+  print(f"study {spec.name}: {len(runs)} runs = {len(spec.seeds)} seeds x tasks x runs per task of each group "
+        f"({per}); retries per run: {spec.retries} -> {folder}")
   for c in runs:
     args_ = c.run_args(cell_folder_of(folder, c.id), os.path.join(folder, STUDY_DB))
     print(f"{c.id}: python -m train.run {shlex.join(args_)}")

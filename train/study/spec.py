@@ -15,7 +15,7 @@ from train.evaluation import EVAL_TRIALS
 from train.presets import get_preset
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": []}
-GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu", "budgets": "runs"}
+GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu", "budgets": "runs", "tasks": []}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
 
@@ -31,6 +31,7 @@ class GroupSpec:
   set: tuple[str, ...]  # config overrides KEY=VALUE, after the preset's
   backend: str  # gpu | cpu: the workers that run its cells (cpu: e.g. one-robot runs)
   budgets: str  # BUDGETS: runs | milestones
+  tasks: tuple[str, ...]  # the study's tasks this group trains; empty: all of them
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,12 +103,20 @@ def _group(raw, i: int) -> GroupSpec:
 def _check_tasks(spec: StudySpec) -> None:
   for task in spec.tasks:
     require(task in available_tasks(), "tasks", lambda: f"unknown task {show(task)}; known: {available_tasks()}")
+  for i, g in enumerate(spec.groups):
+    require(len(set(g.tasks)) == len(g.tasks) and set(g.tasks) <= set(spec.tasks), f"groups[{i}].tasks",
+            lambda: f"distinct tasks of the study's tasks {list(spec.tasks)}, got {show(list(g.tasks))}")
+
+
+def group_tasks(spec: StudySpec, g: GroupSpec) -> tuple[str, ...]:
+  """The tasks a group trains: its own list, else the study's."""
+  return g.tasks or spec.tasks
 
 
 def _check_runs(spec: StudySpec) -> None:
   """Every task's config takes every group's overrides and early stop."""
-  for task in spec.tasks:
-    for i, g in enumerate(spec.groups):
+  for i, g in enumerate(spec.groups):
+    for task in group_tasks(spec, g):
       try:
         cfg = load_config(task, tuple(get_preset(g.algo, g.preset).config_overrides) + g.set)
         if g.early_stop:
@@ -132,9 +141,9 @@ def study_from_dict(raw: dict) -> StudySpec:
           f"distinct integers from 0 to {MAX_SEED}")
   require(0 <= spec.retries <= MAX_RETRIES, "retries", f"from 0 to {MAX_RETRIES}")
   require(1 <= spec.eval_trials <= MAX_TRIALS, "eval_trials", f"from 1 to {MAX_TRIALS:,}")
-  runs = len(spec.tasks) * len(spec.seeds) * sum(len(runs_of(g)) for g in spec.groups)
-  require(runs <= MAX_STUDY_RUNS, "study", f"{runs:,} runs; at most {MAX_STUDY_RUNS:,}")
   _check_tasks(spec)
+  runs = len(spec.seeds) * sum(len(group_tasks(spec, g)) * len(runs_of(g)) for g in spec.groups)
+  require(runs <= MAX_STUDY_RUNS, "study", f"{runs:,} runs; at most {MAX_STUDY_RUNS:,}")
   for i, pair in enumerate(spec.compare):
     require(pair[0] != pair[1] and set(pair) <= set(spec.tasks), f"compare[{i}]",
             lambda: f"two different tasks of the study, got {show(list(pair))}")
@@ -172,4 +181,4 @@ def runs_of(g: GroupSpec) -> list[tuple[int, tuple[int, ...]]]:
 def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order."""
   return [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones)
-          for g in spec.groups for task in spec.tasks for steps, milestones in runs_of(g) for seed in spec.seeds]
+          for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g) for seed in spec.seeds]
