@@ -1,7 +1,8 @@
 """A stand-in for `train.run` / `train.evaluate` in study tests (no JAX): `train ARGS` makes a run
 folder with a checkpoint every 100 steps (0.1 s each) and records the run and one statistics row per
 checkpoint in its database; `evaluate RUN --suite --trials N [--milestones]` records N trials per
-scene of fake_scores() and writes eval-hardest.json. FAKE_CRASH_SEED: that seed's first session
+scene of fake_success() and writes eval-hardest.json (with --baseline NAME --task TASK, first a run
+record of its own). FAKE_CRASH_SEED: that seed's first session
 exits 1 after its first checkpoint; FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
 kill its worker); SIGTERM ends a session like train.run's: run 'interrupted', exit 143."""
 
@@ -66,8 +67,15 @@ def train(argv: list[str]) -> int:
 
 def evaluate(argv: list[str]) -> int:
   out, trials = argv[0], int(argv[argv.index("--trials") + 1])
-  meta = json.load(open(os.path.join(out, "run.json")))
   db = ExperimentDB(argv[argv.index("--db") + 1])
+  if "--baseline" in argv:  # a baseline: a run record of its own, nothing trained
+    name, task = argv[argv.index("--baseline") + 1], argv[argv.index("--task") + 1]
+    meta = {"run_id": f"{task}-baseline-{name}", "task": task, "seed": 0, "steps": 0, "milestones": []}
+    os.makedirs(out, exist_ok=True)
+    json.dump(meta, open(os.path.join(out, "run.json"), "w"))
+    db.start(meta["run_id"], task, "baseline", name, 0, {}, out, 0)
+    db.finish(meta["run_id"], "done", {}, 0)
+  meta = json.load(open(os.path.join(out, "run.json")))
   budgets = [*meta["milestones"], None] if "--milestones" in argv else [None]
   for budget in budgets:
     for scene in SCENES:

@@ -55,19 +55,19 @@ def test_reward_functions_and_termination():
   for kind, expected in (("free", 0.0), ("cog", -0.05 * 0.2), ("angular", -0.05 * 0.2)):
     mon = Monitor(RewardConfig(kind=kind, cog_scale=0.05, angular_scale=0.05), ep)
     terms, prog, _, term, _ = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
-                                           upright, window, jnp.float32(1.0))
+                                           upright, jnp.mean(window), jnp.float32(1.0))
     assert float(terms["progress"]) == pytest.approx(0.25)
     assert float(terms["safety"]) == pytest.approx(expected)
     assert not bool(term)
   mon = Monitor(RewardConfig(kind="cog", cog_scale=0.05), ep)
   _, _, _, term, flags = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
-                                      jnp.array([0.0, 1.7, 0.0]), window, jnp.float32(1.0))
+                                      jnp.array([0.0, 1.7, 0.0]), jnp.mean(window), jnp.float32(1.0))
   assert bool(term) and bool(flags["tipped"])
   _, _, _, term, flags = mon.evaluate(jnp.float32(-0.01), jnp.float32(2.0), jnp.float32(2.0),
-                                      upright, window, jnp.float32(1.0))
+                                      upright, jnp.mean(window), jnp.float32(1.0))
   assert bool(term) and bool(flags["reached"])
   _, _, _, term, flags = mon.evaluate(jnp.float32(2.5), jnp.float32(2.0), jnp.float32(2.0),
-                                      upright, window, jnp.float32(1.0))
+                                      upright, jnp.mean(window), jnp.float32(1.0))
   assert bool(term) and bool(flags["away"])  # 2.5 > 1.2 * 2.0
 
 

@@ -23,7 +23,7 @@ FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
 COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))  # after the worker's Python
 STUDY = {"name": "m", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], "retries": 0, "eval_trials": 4,
          "groups": [{"name": "g", "algo": "ppo", "preset": "cpu", "steps": [200], "backend": "cpu"}],
-         "compare": [["asc-inc-cog", "asc-uni-cog"]]}
+         "compare": [["asc-inc-cog", "asc-uni-cog"]], "baselines": ["zero"]}
 UNFINISHED = ("g/asc-inc-cog/200/s1", "g/asc-uni-cog/200/s1")  # stopped in DEST, finished in SRC
 NO_FOLDER = "g/asc-uni-cog/200/s0"  # done in DEST, but its run folder and rows did not come back
 STOPPED = {"started": 1.0, "ended": None, "rc": None, "stopped": True, "error": "the study stopped"}
@@ -35,7 +35,7 @@ def finished(tmp_path_factory) -> str:
   folder = str(tmp_path_factory.mktemp("full") / "m")
   with Client(processes=False, n_workers=1, threads_per_worker=2, resources={"cpu": 2}, dashboard_address=":0") as c:
     counts = StudyRunner(study_from_dict(STUDY), folder, c, COMMANDS, backends=("cpu",)).run()
-  assert counts["done"] == 4
+  assert counts["done"] == 4 + 2  # and the zero baseline on each task
   return folder
 
 

@@ -6,7 +6,8 @@ from train.study.results import RunResult, StudyResults
 from train.study.spec import cells, study_from_dict
 
 SPEC = study_from_dict({"name": "t", "tasks": ["mixed-terrain", "uplift", "waves"], "seeds": [0, 1, 2],
-                        "groups": [{"name": "ppo", "algo": "ppo", "preset": "cpu", "steps": [100]}]})
+                        "groups": [{"name": "ppo", "algo": "ppo", "preset": "cpu", "steps": [100]}],
+                        "baselines": []})
 SUCCESS = {("mixed-terrain", "hardest/uplift"): 1, ("mixed-terrain", "hardest/waves"): 0,
            ("uplift", "hardest"): 0, ("waves", "hardest"): 1}  # every trial of every seed
 

@@ -28,7 +28,7 @@ COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))  # after the worker's Python
 STUDY = {"name": "t", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], "retries": 1, "eval_trials": 4,
          "groups": [{"name": "g", "algo": "ppo", "preset": "cpu", "steps": [200, 400], "budgets": "milestones",
                      "backend": "cpu"}],
-         "compare": [["asc-inc-cog", "asc-uni-cog"]]}
+         "compare": [["asc-inc-cog", "asc-uni-cog"]], "baselines": ["full"]}
 SLOW = "g/asc-inc-cog/400/s0"  # seed 0 runs slowly; its worker is killed during its first attempt
 
 
@@ -63,12 +63,16 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
     stream = io.StringIO()
     counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=stream, progress_every=0.5).run()
     killer.join()
-    assert counts == {"done": 4, "running": 0, "queued": 0, "failed": 0}
+    assert counts == {"done": 6, "running": 0, "queued": 0, "failed": 0}  # 4 trained runs, 2 baseline evaluations
     state = json.load(open(os.path.join(folder, "state.json")))["cells"]
     slow = state[SLOW]["attempts"]
     assert len(slow) == 2 and "KilledWorker" in slow[0]["error"] and slow[1]["rc"] == 0
     for c in cells(spec):
       run = cell_folder(folder, c)
+      if c.is_baseline:  # evaluated only, once
+        assert not os.path.exists(os.path.join(run, "checkpoints")) and len(state[c.id]["attempts"]) == 1
+        assert json.load(open(os.path.join(run, "run.json")))["run_id"] == f"{c.task}-baseline-full"
+        continue
       assert os.path.exists(os.path.join(run, "eval-hardest.json")) and os.path.isdir(os.path.join(run, "checkpoints", "400"))
       if c.seed == 1:  # crashed after its first checkpoint, resumed from the folder that came back
         tries = state[c.id]["attempts"]
@@ -76,12 +80,12 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
         assert json.load(open(os.path.join(run, "run.json")))["sessions"] == 2
     assert {a["worker"] for c in state.values() for a in c["attempts"] if a.get("worker")} == {"a", "b"}
     progress = stream.getvalue().splitlines()
-    assert progress[-1].startswith("[study] t: 4 done, 0 running, 0 waiting, 0 to retry, 0 failed")
+    assert progress[-1].startswith("[study] t: 6 done, 0 running, 0 waiting, 0 to retry, 0 failed")
     assert len(progress) > 1 + sum(len(c["attempts"]) for c in state.values())  # lines while runs ran, too
     assert any(" 1 running" in line or " 2 running" in line for line in progress)
     lines = summary(folder, runs=True)
     attempts, retried = sum(len(c["attempts"]) for c in state.values()), sum(len(c["attempts"]) > 1 for c in state.values())
-    assert lines[0] == (f"study study: 4 runs: 4 done, 0 failed, 0 not finished (0 submitted: running or waiting for "
+    assert lines[0] == (f"study study: 6 runs: 6 done, 0 failed, 0 not finished (0 submitted: running or waiting for "
                         f"a slot); {attempts} attempts, {retried} runs retried")
     assert attempts >= 7 and retried >= 3  # the killed run and the two crashed ones
     assert any(line.startswith(SLOW) and " done " in line and line.endswith("1.00") for line in lines[2:])
@@ -89,7 +93,7 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
     assert [(a["cell"], a["rc"]) for a in db_attempts] == [(cid, a["rc"]) for cid in sorted(state) for a in state[cid]["attempts"]]
     assert all(a["run_id"] for a in db_attempts if a["rc"] is not None)  # every attempt that ran names its run
     again = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",)).run()
-    assert again["done"] == 4 and json.load(open(os.path.join(folder, "state.json")))["cells"] == state
+    assert again["done"] == 6 and json.load(open(os.path.join(folder, "state.json")))["cells"] == state
   _check_report(folder)
 
 
@@ -113,6 +117,10 @@ def _check_report(folder: str) -> None:
     p = sum((x > y) + 0.5 * (x == y) for x in a for y in b) / (len(a) * len(b))
     row = [line for line in text.splitlines() if line.startswith(f"| g | {budget:,} | asc-inc-cog | asc-uni-cog |")]
     assert len(row) == 1 and row[0].split(" | ")[4].startswith(f"{p:.2f} ["), row
+  for task in ("asc-inc-cog", "asc-uni-cog"):  # the baseline's trials (seed 0's outcomes, budget 0) beside them
+    full = sum(fake_success(task, 0, 0, i) for i in range(4)) / 4
+    assert f"| {task} | baseline full | {full:.3f} | 0.500 | 0.200 | 0.100 |" in text
+    assert f"| baseline-full | {task} | - | 1 | {full:.2f} [" in text
   figures = [line[line.index("(") + 1:-1] for line in text.splitlines() if line.startswith("![")]
   assert sorted(figures) == ["curves-g-step.png", "curves-g-wall_s.png", "final-g.png"]
   assert all(os.path.getsize(os.path.join(folder, f)) > 10_000 for f in figures)
@@ -185,7 +193,7 @@ def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_not
   import psutil
   scratch, folder = tmp_path / "scratch", str(tmp_path / "study")
   scratch.mkdir()
-  study = {**STUDY, "tasks": ["asc-inc-cog"], "seeds": [0], "compare": []}
+  study = {**STUDY, "tasks": ["asc-inc-cog"], "seeds": [0], "compare": [], "baselines": []}
   proc = subprocess.Popen([sys.executable, "-c", _STUDY_MAIN, json.dumps([study, folder, str(scratch), COMMANDS])],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
   t_end, runs = time.time() + 120, []

@@ -18,8 +18,9 @@ STUDY = {"name": "s", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1, 2
 
 def test_the_grid_has_one_run_per_group_task_budget_and_seed():
   spec = study_from_dict({**STUDY, "groups": [GROUP, {**GROUP, "name": "sac", "algo": "sac", "steps": [64]}]})
-  runs = cells(spec)
-  assert len(runs) == 2 * 3 * (2 + 1) and len({c.id for c in runs}) == len(runs)
+  runs = [c for c in cells(spec) if not c.is_baseline]
+  assert len(runs) == 2 * 3 * (2 + 1) and len({c.id for c in cells(spec)}) == len(cells(spec))
+  assert len(cells(spec)) - len(runs) == 2 * 4  # every baseline on each task, once
   assert {(c.group, c.steps) for c in runs} == {("ppo", 512), ("ppo", 1024), ("sac", 64)}
   assert spec.retries == 1 and spec.eval_trials == 100  # the defaults
   one = study_from_dict({**STUDY, "groups": [GROUP, {**GROUP, "name": "inc", "tasks": ["asc-inc-cog"]}]})
@@ -28,7 +29,7 @@ def test_the_grid_has_one_run_per_group_task_budget_and_seed():
 
 def test_a_run_plans_like_its_command_line(tmp_path):
   spec = study_from_dict({**STUDY, "groups": [{**GROUP, "early_stop": "success=0.9x3", "set": ["reward.cog_scale=0.25"]}]})
-  c = cells(spec)[-1]
+  c = [c for c in cells(spec) if not c.is_baseline][-1]
   plan = plan_run(run_parser().parse_args(c.run_args(str(tmp_path / "run"), str(tmp_path / "db.sqlite"))))
   assert (plan.task, plan.algo, plan.preset_name, plan.total_steps, plan.seed) == ("asc-uni-cog", "ppo", "cpu", 1024, 2)
   assert plan.cfg.reward.cog_scale == 0.25 and str(plan.early_stop) == "success=0.9x3"
@@ -67,15 +68,17 @@ def test_bad_studies_fail_naming_the_fault(change, words):
 
 def test_the_shipped_studies_validate_and_the_command_lists_their_runs(capsys):
   assert all(cells(load_study(str(path))) for path in STUDIES.glob("*.yaml"))
-  assert len(cells(load_study("curricula"))) == 3 * (2 + 1 + 1)  # the variant groups train asc-inc-cog only
-  paper = cells(load_study("paper"))  # a shipped study by name
+  trained = lambda name: [c for c in cells(load_study(name)) if not c.is_baseline]  # noqa: E731
+  assert len(trained("curricula")) == 3 * (2 + 1 + 1)  # the variant groups train asc-inc-cog only
+  paper = trained("paper")  # a shipped study by name
   assert len(paper) == 4 * 5 * 3  # SAC with and without early stop; PPO's 4 budgets: milestones of one run
   ppo = [c for c in paper if c.group == "ppo"]
   assert {c.budgets() for c in ppo} == {(250_000, 500_000, 1_000_000, 2_000_000)}
   assert all(c.train_args()[-2:] == ["--milestones", "250000,500000,1000000"] for c in ppo)
   assert study_main([str(STUDIES / "tiny.yaml"), "--plan", "--set", "seeds=[7]"]) == 0
   lines = capsys.readouterr().out.splitlines()
-  assert len(lines) == 1 + 2 and all("--seed 7 " in line for line in lines[1:])
+  assert len(lines) == 1 + 2 + 2 * 4 and all("--seed 7 " in line for line in lines[1:3])
+  assert all("train.evaluate" in line and "--baseline" in line for line in lines[3:])
   assert study_main(["tiny", "--plan", "--set", "retries=-1"]) == 2
   assert study_main([str(STUDIES / "nope.yaml"), "--plan"]) == 2
   assert "no such study file" in capsys.readouterr().err

@@ -11,6 +11,10 @@ each, deterministic policy: the exported RUN_DIR/policy, those exported at miles
 (--milestones), or with --checkpoint [STEP] a training checkpoint (a killed run has no export yet).
 Writes RUN_DIR/eval-<scene>[@<budget>].json (mean +- std of progress, success, COG deviation,
 |pitch rate|, tip-overs, episode length) and one database row per trial.
+Every trial's start is varied by the task's evaluation.trial_variation (position, yaw, joints), so
+the trials are samples. `--baseline NAME --task TASK [RUN_DIR]` evaluates a baseline policy
+(mjx_tracks.baselines: zero, full, random, scripted) the same way, recorded as a run of algorithm
+`baseline` (default folder runs/baselines/TASK-NAME).
 """
 
 from __future__ import annotations
@@ -21,13 +25,16 @@ import json
 import os
 import sys
 
-from mjx_tracks.envs.config import ConfigError, TaskConfig, from_dict
+from mjx_tracks.baselines import ALGO as BASELINE_ALGO, BASELINES, baseline
+from mjx_tracks.envs.config import ConfigError, TaskConfig, available_tasks, from_dict, load_config
 from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.evaluation import (EVAL_EPS, EVAL_SEED, EVAL_TRIALS, SCENES, fewer_trials_path, milestone_folder,
                               report_path, saved_milestones, scene_config, suite_scenes, trial_runner, trials_in)
-from train.run_record import read_run_record
+from train.run_record import read_run_record, run_id_in, write_run_record
+
+BASELINE_ROOT = os.path.join("runs", "baselines")  # where --baseline runs go unless RUN_DIR is given
 
 def _policy(run_dir: str, checkpoint: str | None, milestone: int | None = None):
   """(make_act, params, step) of the exported policy, of the one exported at a milestone budget, or
@@ -41,6 +48,39 @@ def _policy(run_dir: str, checkpoint: str | None, milestone: int | None = None):
     raise ValueError(f"--checkpoint takes a step number (or nothing, for the latest), got {checkpoint!r}")
   spec, params, step = load_checkpoint_params(run_dir, None if checkpoint == "latest" else int(checkpoint))
   return act_from_params(spec), params, step
+
+
+def _baseline_policy(name: str, cfg: TaskConfig):
+  """(make_act, params, step) of a baseline: it sees the whole env state (trial_runner's observe)."""
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
+  act = baseline(name).make(TrackedRobotEnv(cfg))
+  return (lambda _params: act), None, None
+
+
+def _baseline_record(args) -> dict:
+  """The run record of a baseline's folder: the one there, or a new one (and its database row)."""
+  if args.task not in available_tasks():
+    raise ValueError(f"--baseline needs --task, one of {', '.join(available_tasks())}; got {args.task!r}")
+  cfg = load_config(args.task)
+  b = baseline(args.baseline)
+  if not b.applies(cfg):
+    raise ValueError(f"baseline {b.name!r} ({b.meaning}) cannot drive {args.task}")
+  args.run_dir = args.run_dir or os.path.join(BASELINE_ROOT, f"{args.task}-{b.name}")
+  if run_id_in(args.run_dir):
+    meta = read_run_record(args.run_dir)
+    if (meta["algo"], meta.get("preset"), meta["task"]) != (BASELINE_ALGO, b.name, args.task):
+      raise ValueError(f"{args.run_dir} holds {meta['task']} {meta['algo']} {meta.get('preset')}, not baseline "
+                       f"{b.name} on {args.task}")
+    return meta
+  import secrets  # noqa: PLC0415
+  meta = {"run_id": f"{args.task}-{BASELINE_ALGO}-{b.name}-{secrets.token_hex(3)}", "task": args.task,
+          "algo": BASELINE_ALGO, "preset": b.name, "seed": 0, "total_steps": 0, "config": cfg.to_dict()}
+  write_run_record(args.run_dir, meta)
+  from train.db import ExperimentDB, default_path  # noqa: PLC0415
+  db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(args.run_dir))))
+  db.start(meta["run_id"], args.task, BASELINE_ALGO, b.name, 0, meta["config"], args.run_dir, 0)
+  db.finish(meta["run_id"], "done", detail=b.meaning)
+  return meta
 
 
 def _record_trials(args: argparse.Namespace, run_id: str, scene: str, budget: int | None,
@@ -59,7 +99,10 @@ def _record_trials(args: argparse.Namespace, run_id: str, scene: str, budget: in
 
 def parser() -> argparse.ArgumentParser:
   p = argparse.ArgumentParser(prog="python -m train.evaluate", description=__doc__.splitlines()[0])
-  p.add_argument("run_dir")
+  p.add_argument("run_dir", nargs="?", help="a run folder (with --baseline: where the baseline's records go)")
+  p.add_argument("--baseline", choices=tuple(BASELINES), help="evaluate a baseline policy on --task instead of "
+                 "a trained one (mjx_tracks.baselines)")
+  p.add_argument("--task", help="with --baseline: the task")
   p.add_argument("--trials", type=int, default=EVAL_TRIALS)
   p.add_argument("--scene", default="hardest", help=f"one of {', '.join(SCENES)}, {HELD_OUT}NAME "
                  f"(a fixed configuration of the task's evaluation section), {HARDEST}KIND (a terrain kind "
@@ -84,11 +127,15 @@ def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: Tas
   """Runs one scene with the policy of each budget (one compilation); writes each report and its
   trials; returns the summary lines."""
   cfg = scene_config(cfg0, scene)
-  policies = {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}
+  if args.baseline:
+    policies = {None: _baseline_policy(args.baseline, cfg)}
+  else:
+    policies = {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}
   print(f"{scene}: compiling and running {args.trials} trials of up to {cfg.episode.max_steps} steps "
         f"({len(budgets)} polic{'y' if len(budgets) == 1 else 'ies'}; the first time on this machine takes "
         "a minute or more) ...", file=sys.stderr, flush=True)
-  run = trial_runner(cfg, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video))
+  observe = (lambda s: s) if args.baseline else (lambda s: s.obs)  # a baseline may read the whole state
+  run = trial_runner(cfg, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video), observe)
   lines = []
   for budget, (_, params, policy_step) in policies.items():
     per_trial, qpos, render_model = run(params)
@@ -145,6 +192,8 @@ def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
   for scene in scenes:
     scene_config(cfg, scene)  # ConfigError on an unknown scene
   budgets: list[int | None] = [None]
+  if args.baseline and (args.milestones or args.checkpoint is not None):
+    raise ValueError("a baseline has no milestones nor checkpoints")
   if args.milestones:
     if args.checkpoint is not None:
       raise ValueError("--milestones evaluates exported policies; drop --checkpoint")
@@ -164,7 +213,12 @@ def main(argv: list[str] | None = None) -> int:
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   try:
-    meta = read_run_record(args.run_dir)
+    if args.baseline:
+      meta = _baseline_record(args)
+    elif args.run_dir is None or args.task:
+      raise ValueError("give a RUN_DIR to evaluate a trained run, or --baseline NAME --task TASK")
+    else:
+      meta = read_run_record(args.run_dir)
     cfg = from_dict(meta["config"])
     for scene, budgets in _jobs(args, cfg):
       for line in _evaluate(args, meta, scene, budgets, cfg):

@@ -5,7 +5,6 @@ server and scripts import from here."""
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 
@@ -13,6 +12,7 @@ import numpy as np
 
 from mjx_tracks.envs.config import ConfigError, TaskConfig
 from scenes.kinds import COMMON_SCENES, scene_kind
+from scenes.kinds.base import replace_scene
 from train.run_record import run_config  # noqa: F401  (the config a run recorded: part of this library)
 
 SCENES = ("hardest", *COMMON_SCENES)  # the plain scene names (a task's kind adds prefixed ones)
@@ -25,14 +25,16 @@ def suite_scenes(cfg: TaskConfig) -> list[str]:
 
 def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
   """The task with its scenes drawn as an evaluation scene says: uniform, incremental or train
-  (any kind), or one of its scene kind's own (hardest, HELD_OUT + NAME, ...; scenes.kinds)."""
+  (any kind), or one of its scene kind's own (hardest, HELD_OUT + NAME, ...; scenes.kinds); every
+  trial's start varied by evaluation.trial_variation, so that trials are samples."""
   if scene in COMMON_SCENES:
-    return cfg if scene == "train" else dataclasses.replace(cfg, scene=dataclasses.replace(cfg.scene, sampler=scene))
-  pinned = scene_kind(cfg.scene.kind).pinned(cfg, scene)
-  if pinned is None:
+    drawn = cfg if scene == "train" else replace_scene(cfg, sampler=scene)
+  else:
+    drawn = scene_kind(cfg.scene.kind).pinned(cfg, scene)
+  if drawn is None:
     raise ConfigError(f"unknown scene {scene!r} for a {cfg.scene.kind} task: one of {', '.join(COMMON_SCENES)} or "
                       f"its suite's {', '.join(s for s in suite_scenes(cfg) if s not in COMMON_SCENES) or '(none)'}")
-  return pinned
+  return replace_scene(drawn, start_jitter=cfg.evaluation.trial_variation)
 
 
 EVAL_TRIALS = 100  # trials of an evaluation (and of the in-training hardest probe)

@@ -209,6 +209,7 @@ class SceneConfig:
   terrain: TerrainRanges  # every terrain kind's parameter ranges
   random_spawn: bool
   random_goal: bool
+  start_jitter: tuple[float, float, float]  # ~ U(-a, a) each: start x and y (m), yaw (rad), joint angles (rad)
   curriculum: CurriculumConfig
 
   @property
@@ -235,6 +236,19 @@ class SceneConfig:
       r = getattr(self, name)
       require(lo <= r[0] <= r[1] <= hi, f"{key}.{name}", f"needs {lo} <= min <= max <= {hi}, got {list(r)}")
     self.curriculum.validate(f"{key}.curriculum")
+    validate_jitter(self.start_jitter, f"{key}.start_jitter")
+
+
+# how the safety penalty is spread over an episode (mjx_tracks.envs.rewards.Monitor): the paper's moving
+# window of samples per step, or the change of the episode's running mean (its sum: the mean)
+SAFETY_FORMS = ("window", "episode_mean")
+JITTER_LIMITS = (0.5, 3.1416, 1.0)  # m, rad, rad: the most a start jitter / trial variation may vary
+
+
+def validate_jitter(a: tuple[float, float, float], key: str) -> None:
+  """A (position m, yaw rad, joints rad) half-width triple, each from 0 to its JITTER_LIMITS."""
+  require(len(a) == 3 and all(0.0 <= v <= hi for v, hi in zip(a, JITTER_LIMITS)), key,
+          lambda: f"[position m, yaw rad, joints rad], each from 0 to {list(JITTER_LIMITS)}, got {show(a)}")
 
 
 # each reward kind -> the safety signal (a per-step metric) its penalty reads; a scene kind must measure it
@@ -251,9 +265,12 @@ class RewardConfig:
   normalize_penalties: bool  # the original's K = 1 / mean penalty sum of the first episodes
   normalize_episodes: int = dataclasses.field(metadata=bound(1))
   safety_window: int = dataclasses.field(metadata=bound(1))  # samples averaged by the penalty
+  safety_form: str  # SAFETY_FORMS
 
   def validate(self, key: str) -> None:
     require(self.kind in REWARD_SIGNALS, f"{key}.kind", lambda: f"must be one of {list(REWARD_SIGNALS)}, got {show(self.kind)}")
+    require(self.safety_form in SAFETY_FORMS, f"{key}.safety_form",
+            lambda: f"must be one of {list(SAFETY_FORMS)}, got {show(self.safety_form)}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -302,10 +319,12 @@ class HeldOutTerrain:
 
 @dataclasses.dataclass(frozen=True)
 class EvaluationConfig:
+  trial_variation: tuple[float, float, float]  # evaluation scenes' start jitter (SceneConfig.start_jitter)
   held_out: tuple[HeldOutScene, ...]  # stair tasks: fixed staircases of the evaluation suite
   held_out_terrain: tuple[HeldOutTerrain, ...]  # terrain tasks: fixed terrains of the kinds they draw
 
   def validate(self, key: str) -> None:
+    validate_jitter(self.trial_variation, f"{key}.trial_variation")
     for field in ("held_out", "held_out_terrain"):
       names = [h.name for h in getattr(self, field)]
       require(len(set(names)) == len(names), f"{key}.{field}", f"names repeat: {names}")
@@ -489,6 +508,9 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("scene", "nav_floor_height"): FROM_DEFAULTS,
               ("scene", "terrain"): FROM_DEFAULTS,
               ("scene", "terrain", "spiral_up"): FROM_DEFAULTS, ("scene", "terrain", "spiral_down"): FROM_DEFAULTS,
+              ("scene", "start_jitter"): [0.0, 0.0, 0.0],  # before start jitter: the fixed spawn
+              ("reward", "safety_form"): "window",  # before safety forms: the paper's window
+              ("evaluation", "trial_variation"): FROM_DEFAULTS,  # evaluation only: old runs are evaluated as today's
               ("evaluation", "held_out_terrain"): FROM_DEFAULTS}  # evaluation only: old runs get today's
 
 

@@ -9,9 +9,12 @@ COG deviation (ascent, while on the stairs): with r the centre of mass relative 
 origin, expressed in a frame tilted by the stair incline theta = atan(h / l) (x' along the incline,
 z' normal to it), Cx = x' - tan|theta| z' and deviation = sqrt(z'^2 + Cx^2), clipped to [0, 0.32] m.
 Angular (descent): |pitch angular velocity| (rad/s) of the chassis.
-Safety penalty: scale * K * mean of the last `safety_window` safety samples; K = 1, or with
-normalize_penalties the original's K = 1 / mean per-episode penalty sum of the first N episodes
-(no penalty during those N).
+Safety penalty (reward.safety_form): `window`, the paper's, scale * K * mean of the last
+`safety_window` safety samples per step (its episode sum grows with the episode's length, so a
+policy that hurries pays less); `episode_mean`, scale * K * (M_t - M_{t-1}) with M_t the mean of the
+episode's first t samples, whose sum over an episode is scale * K * the episode's mean sample: the
+very figure evaluation reports, whatever the episode's length. K = 1, or with normalize_penalties
+the original's K = 1 / mean per-episode penalty sum of the first N episodes (no penalty during those N).
 Tip-over: |roll| or |pitch| > pi/2 costs tipover_penalty and ends the episode. The episode also
 ends when the goal is reached (dist < 0) or the robot moved away (dist > away_factor * d0).
 """
@@ -110,15 +113,23 @@ class Monitor:
   def safety_scale(self) -> float:
     return {"cog": self.reward.cog_scale, "angular": self.reward.angular_scale}.get(self.reward.kind, 0.0)
 
-  def evaluate(self, dist, closest, d0, rpy, window: jax.Array, k: jax.Array):
-    """Reward terms, new closest, terminated flag, flags dict for one step."""
+  def safety_rate(self, window: jax.Array, signal_sum: jax.Array, steps: jax.Array) -> jax.Array:
+    """This step's safety quantity before scale and K (reward.safety_form): the window's mean, or the
+    change of the episode's running mean, signal_sum / steps counting this step's sample (steps >= 1)."""
+    if self.reward.safety_form == "window":
+      return jnp.mean(window)
+    before = (signal_sum - window[0]) / jnp.maximum(steps - 1, 1)  # window[0]: this step's sample
+    return signal_sum / steps - jnp.where(steps > 1, before, 0.0)
+
+  def evaluate(self, dist, closest, d0, rpy, rate: jax.Array, k: jax.Array):
+    """Reward terms, new closest, terminated flag, flags dict for one step; rate: safety_rate(...)."""
     progress, closest = progress_step(dist, closest, d0)
     tipped = tipped_over(rpy)
     reached = goal_reached(dist)
     away = dist > self.episode.away_factor * d0
     terms = {
         "progress": self.reward.progress_scale * progress,
-        "safety": -self.safety_scale() * k * jnp.mean(window),
+        "safety": -self.safety_scale() * k * rate,
         "tipover": -self.reward.tipover_penalty * tipped.astype(jnp.float32),
     }
     return terms, progress, closest, tipped | reached | away, {"tipped": tipped, "reached": reached, "away": away}

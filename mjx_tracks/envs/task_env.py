@@ -41,7 +41,9 @@ class EnvState:
   targets: jax.Array  # (n_joints,) rad, joint servo targets
   d0: jax.Array  # () m, starting goal distance (minus tolerance)
   closest: jax.Array  # () m, closest goal distance so far
-  window: jax.Array  # (safety_window,) last raw safety samples
+  window: jax.Array  # (safety_window,) last raw safety samples, newest first
+  signal_sum: jax.Array  # () raw safety samples summed over the episode
+  steps: jax.Array  # () int32 control steps taken in the episode
   penalty_sum: jax.Array  # () raw safety penalty summed over the episode
   penalty_k: jax.Array  # () global penalty normalization K
   key: jax.Array
@@ -111,13 +113,15 @@ class TrackedRobotEnv(Env):
     pitch_rate = jnp.abs(data.qvel[4])  # rad/s, chassis-frame pitch rate
     sample = self.monitor.safety_sample(cog, pitch_rate)
     window = jnp.roll(es.window, 1).at[0].set(sample)
+    signal_sum, steps = es.signal_sum + sample, es.steps + 1
+    rate = self.monitor.safety_rate(window, signal_sum, steps)
     terms, progress, closest, terminated, flags = self.monitor.evaluate(
-        dist, es.closest, es.d0, rpy, window, es.penalty_k)
+        dist, es.closest, es.d0, rpy, rate, es.penalty_k)
     terms = {k: jnp.where(finite, t, 0.0) for k, t in terms.items()}
     terminated = terminated | ~finite
     key, k_obs = jax.random.split(es.key)
-    es = es.replace(data=data, targets=targets, closest=closest, window=window, key=key,
-                    penalty_sum=es.penalty_sum + self.monitor.safety_scale() * jnp.mean(window))
+    es = es.replace(data=data, targets=targets, closest=closest, window=window, key=key, signal_sum=signal_sum,
+                    steps=steps, penalty_sum=es.penalty_sum + self.monitor.safety_scale() * rate)
     # keys stay those of reset (wrappers may add their own): update values in place
     metrics = {**state.metrics,
                **self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)}
@@ -131,17 +135,35 @@ class TrackedRobotEnv(Env):
     k_scene, k_obs, k_next = jax.random.split(rng, 3)
     scene = self.scene.sample(k_scene, eps)
     m = self.sim.with_boxes(scene.box_pos, scene.box_size, scene.box_yaw)
-    nj = self.sim.layout.n_joints
-    data = self._sense(m, self.sim.init_data(scene.spawn_pos, scene.spawn_yaw, jnp.zeros(nj)))
+    spawn, yaw, joints = self._start(scene, jax.random.fold_in(k_scene, 1))
+    data = self._sense(m, self.sim.init_data(spawn, yaw, joints))
     d0 = goal_distance(data.xpos[self.sim.layout.chassis_body], scene.goal, scene.goal_halfwidth,
                        self.cfg.episode.goal_tolerance)
-    es = EnvState(data=data, scene=scene, targets=jnp.zeros(nj), d0=d0, closest=d0,
-                  window=jnp.zeros(self.cfg.reward.safety_window), penalty_sum=jnp.float32(0.0),
+    es = EnvState(data=data, scene=scene, targets=joints, d0=d0, closest=d0,
+                  window=jnp.zeros(self.cfg.reward.safety_window), signal_sum=jnp.float32(0.0),
+                  steps=jnp.int32(0), penalty_sum=jnp.float32(0.0),
                   penalty_k=jnp.asarray(penalty_k, jnp.float32), key=k_next)
     zero = jnp.float32(0.0)
     metrics = {k: zero for k in METRICS}
     return State(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=zero, done=zero,
                  metrics=metrics, info={"eps": jnp.asarray(eps, jnp.float32)})
+
+  def _start(self, scene: SceneState, key: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """The robot's start: the scene's spawn (ground point, yaw) and joints at 0, each varied by
+    scene.start_jitter (a_pos, a_yaw, a_joint): x, y ~ U(-a_pos, a_pos) m, yaw ~ + U(-a_yaw, a_yaw)
+    rad, every joint ~ U(-a_joint, a_joint) rad clipped to its limits; the joints' servo targets
+    start where the joints are."""
+    nj = self.sim.layout.n_joints
+    a_pos, a_yaw, a_joint = self.cfg.scene.start_jitter
+    if not (a_pos or a_yaw or a_joint):  # the paper's fixed start (and the same random stream as before)
+      return scene.spawn_pos, scene.spawn_yaw, jnp.zeros(nj)
+    k_pos, k_yaw, k_joint = jax.random.split(key, 3)
+    offset = jax.random.uniform(k_pos, (2,), minval=-a_pos, maxval=a_pos)
+    spawn = scene.spawn_pos.at[:2].add(offset)
+    yaw = scene.spawn_yaw + jax.random.uniform(k_yaw, minval=-a_yaw, maxval=a_yaw)
+    lim = jnp.asarray(self.controller.joint_limits, jnp.float32)
+    joints = jnp.clip(jax.random.uniform(k_joint, (nj,), minval=-a_joint, maxval=a_joint), lim[:, 0], lim[:, 1])
+    return spawn, yaw, joints
 
   # --- sensors ------------------------------------------------------------------------------
   def _sense(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:

@@ -101,6 +101,19 @@ class Controller:
     target = jnp.where(driven, target, prev_targets)
     return v, w, jnp.clip(target, lim_lo, lim_hi)
 
+  def encode(self, v: jax.Array, w: jax.Array, targets: jax.Array, prev_targets: jax.Array) -> jax.Array:
+    """The action that asks for speed v (m/s), yaw rate w (rad/s) and joint targets (rad) from
+    prev_targets, as near as one step's action can (clipped to [-1, 1]): decode's inverse, for
+    controllers that think in speeds and angles. A joint dimension reads its group's first joint."""
+    lo, hi = self.v_range
+    cmd = {"v": 2.0 * (v - lo) / (hi - lo) - 1.0, "w": w / self.max_yaw_rate}
+    lim_lo, lim_hi = jnp.asarray(self.joint_limits[:, 0]), jnp.asarray(self.joint_limits[:, 1])
+    joint_cmd = ((targets - prev_targets) / INCREMENT if self.increments
+                 else 2.0 * (targets - lim_lo) / (lim_hi - lim_lo) - 1.0)
+    first = np.argmax(self.drive, axis=0)  # (n_action,) each joint dimension's first joint
+    parts = [cmd[d] if d in cmd else joint_cmd[first[a]] for a, d in enumerate(self.dims)]
+    return jnp.clip(jnp.stack([jnp.asarray(x, jnp.float32) for x in parts]), -1.0, 1.0)
+
   def belt_speeds(self, v: jax.Array, w: jax.Array) -> jax.Array:
     """(v, w) -> speeds of the 6 belts (m/s): left/right tracks, then the four flippers."""
     return command_belt_speeds(v, w, self.track_separation, self.steering_efficiency, self.max_speed)

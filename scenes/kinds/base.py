@@ -31,6 +31,7 @@ class SceneKind:
   camera: str = "follow"  # mjx_tracks.tools.render: "follow" (behind the robot) | "overhead"
   signals: tuple[str, ...] = ("pitch_rate",)  # safety signals its scenes measure (metrics names)
   parameters: str = ""  # one line for the README / dashboard: what its xi holds
+  stair_script: bool = False  # whether the stair script (the `scripted` baseline, mjx_tracks.baselines) fits it
 
   def has_hardest(self, s: SceneConfig) -> bool:
     """Whether its scenes have a hardest configuration (every parameter at its hard end)."""

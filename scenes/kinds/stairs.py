@@ -17,6 +17,7 @@ class Stairs(SceneKind):
   name = "stairs"
   signals = ("pitch_rate", "cog_deviation", "on_stairs")
   parameters = "scene.tread, scene.riser, scene.steps ranges; scene.direction up | down"
+  stair_script = True
 
   def has_hardest(self, s) -> bool:
     return True

@@ -55,13 +55,16 @@ def main(argv=None) -> int:
   folder = os.path.join(args.root, spec.name)
   if not args.plan:
     return _run(spec, folder, args)
-  runs = cells(spec)
+  runs = [c for c in cells(spec) if not c.is_baseline]
+  base = [c for c in cells(spec) if c.is_baseline]
   per = ", ".join(f"{g.name}: {len(group_tasks(spec, g))} tasks x {len(runs_of(g))}" for g in spec.groups)
   print(f"study {spec.name}: {len(runs)} runs = {len(spec.seeds)} seeds x tasks x runs per task of each group "
-        f"({per}); retries per run: {spec.retries} -> {folder}")
+        f"({per}), and {len(base)} baseline evaluations; retries per run: {spec.retries} -> {folder}")
+  db = os.path.join(folder, STUDY_DB)
   for c in runs:
-    args_ = c.run_args(cell_folder_of(folder, c.id), os.path.join(folder, STUDY_DB))
-    print(f"{c.id}: python -m train.run {shlex.join(args_)}")
+    print(f"{c.id}: python -m train.run {shlex.join(c.run_args(cell_folder_of(folder, c.id), db))}")
+  for c in base:
+    print(f"{c.id}: python -m train.evaluate {shlex.join([cell_folder_of(folder, c.id), *c.eval_args(spec.eval_trials), '--db', db])}")
   return 0
 
 

@@ -135,10 +135,10 @@ class StudyRunner:
     has_run = os.path.isdir(ckpts) and bool(os.listdir(ckpts))
     resume = pack(local) if has_run else None
     evaluated = bool(ended) and ended[-1]["phase"] == "evaluate"  # training finished (or stopped early)
-    train = not (has_run and (evaluated or _trained_to_the_end(local)))  # else evaluate again only
+    train = not (cell.is_baseline or has_run and (evaluated or _trained_to_the_end(local)))  # else evaluate only
     record["status"] = "running"
     record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
-    eval_args = ["--suite", "--trials", str(self.spec.eval_trials)] + (["--milestones"] if cell.milestones else [])
+    eval_args = cell.eval_args(self.spec.eval_trials)
     backend = cell.backend if cell.backend in self.backends else self.backends[0]
     return self.client.submit(run_cell, cell.train_args(), eval_args, resume, train, self.commands,
                               key=f"{cid}/attempt-{len(record['attempts'])}", pure=False, resources={backend: 1})

@@ -14,6 +14,7 @@ from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.study.executor import overview
 from train.study.figures import write_figures
 from train.study.paper import FIGURE9
+from mjx_tracks.baselines import BASELINES, CONSTANT, SATURATED, saturated
 from train.study.results import StudyResults, load_results
 from train.study.statistics import LEVEL, REPS, improvement, iqm_intervals
 
@@ -32,6 +33,11 @@ def _mean_sd(x: np.ndarray, digits: int = 3) -> str:
   return "-" if not len(x) else f"{x.mean():.{digits}f} +- {x.std():.{digits}f}"
 
 
+def budget_text(budget: int) -> str:
+  """A budget for a table: steps, or '-' for a baseline's (0: nothing trained)."""
+  return f"{budget:,}" if budget else "-"
+
+
 def _runs(results: StudyResults, group: str, task: str, budget: int) -> int:
   """Finished runs (seeds) of a row: those with trials on any scene."""
   return max((len(results.final(group, task, budget, s, "success")) for s in results.scenes()), default=0)
@@ -47,7 +53,7 @@ def final_table(results: StudyResults) -> list[str]:
   for group, task, budget in results.groups():
     fig = lambda m, s: results.final(group, task, budget, s, m)  # noqa: E731
     est = iqm_intervals({f"{m} {s}": fig(m, s) for m, s in FINAL_COLUMNS})
-    lines.append(f"| {group} | {task} | {budget:,} | {_runs(results, group, task, budget)} | "
+    lines.append(f"| {group} | {task} | {budget_text(budget)} | {_runs(results, group, task, budget)} | "
                  f"{' | '.join(ci_text(est.get(c)) for c in cols)} | "
                  f"{_mean_sd(fig('pitch_rate', 'hardest'))} | {_mean_sd(fig('tipped_over', 'hardest'), 2)} |")
   return lines
@@ -63,7 +69,7 @@ def suite_table(results: StudyResults) -> list[str]:
       fig = {m: results.final(group, task, budget, scene, m) for m in ("success", "progress")}
       if len(fig["success"]):
         est = iqm_intervals(fig)
-        lines.append(f"| {group} | {task} | {budget:,} | {scene} | {len(fig['success'])} | "
+        lines.append(f"| {group} | {task} | {budget_text(budget)} | {scene} | {len(fig['success'])} | "
                      f"{ci_text(est.get('success'))} | {ci_text(est.get('progress'))} |")
   return lines if len(lines) > 2 else []
 
@@ -72,7 +78,7 @@ def improvement_table(results: StudyResults) -> list[str]:
   """P(A > B) [95 % CI] for every compare pair, group and budget, per metric and scene."""
   lines = ["| group | budget | A | B | " + " | ".join(f"P(A > B), {m} {s}" for m, s in IMPROVEMENT_METRICS) + " |",
            "|---" * (4 + len(IMPROVEMENT_METRICS)) + "|"]
-  for group, budget in dict.fromkeys((g, b) for g, _, b in results.groups()):
+  for group, budget in dict.fromkeys((g, b) for g, _, b in results.trained_groups()):
     for a, b in results.spec.compare:
       fig = lambda task, m, s: results.final(group, task, budget, s, m)  # noqa: E731
       est = improvement({f"{m} {s}": (fig(a, m, s), fig(b, m, s)) for m, s in IMPROVEMENT_METRICS})
@@ -89,14 +95,14 @@ def generalization_table(results: StudyResults) -> list[str]:
   groups = {t: scene_kind(s.kind).groups(s) if scene_kind(s.kind).has_hardest(s) else () for t, s in kinds.items()}
   mixed = [t for t, g in groups.items() if len(g) > 1]
   lines = []
-  for group, task, budget in results.groups():
+  for group, task, budget in results.trained_groups():
     if task not in mixed:
       continue
     for kind in groups[task]:
       success = lambda t, scene: iqm_intervals({"x": results.final(group, t, budget, scene, "success")}).get("x")  # noqa: E731
       own = success(task, HARDEST + kind)
       special = [(t, success(t, "hardest")) for t, g in groups.items() if g == (kind,)]
-      lines.append(f"| {group} | {budget:,} | {kind} | {ci_text(own)} | "
+      lines.append(f"| {group} | {budget_text(budget)} | {kind} | {ci_text(own)} | "
                    f"{'; '.join(f'{t}: {ci_text(e)}' for t, e in special) or '-'} |")
   head = ["| group | budget | terrain kind | mixed policy, success on its hardest | specialist policy, success on its hardest |",
           "|---|---|---|---|---|"]
@@ -114,10 +120,35 @@ def paper_table(results: StudyResults) -> list[str]:
     for group, t, budget in results.groups():
       if t == task:
         fig = lambda m: results.final(group, task, budget, "hardest", m)  # noqa: E731
-        source = f"{group} @ {budget:,} ({len(fig('progress'))} seeds)"
+        source = f"{group} @ {budget_text(budget)} ({len(fig('progress'))} seeds)"
         lines.append(f"| {task} | {source} | {_mean_sd(fig('progress'))} | {_mean_sd(fig('cog_deviation'))} | "
                      f"{_mean_sd(fig('pitch_rate'))} |")
   return lines
+
+
+SAFETY_FIGURES = ("pitch_rate", "cog_deviation")  # the tasks' own safety figures (mjx_tracks.metrics), lower better
+
+
+def baseline_table(results: StudyResults) -> list[str]:
+  """Per task: each baseline's success and safety figures on the hardest scene, the best trained
+  group's beside them, and whether the task is saturated (a constant baseline reaches SATURATED)."""
+  head = ["| task | policy | success hardest | progress hardest | " +
+          " | ".join(f"{m.replace('_', ' ')} hardest" for m in SAFETY_FIGURES) + " |", "|---" * (4 + len(SAFETY_FIGURES)) + "|"]
+  lines = []
+  for task in results.spec.tasks:
+    success = results.baseline_figure(task, "hardest", "success")
+    if not success:
+      continue
+    for name in success:
+      fig = {m: results.baseline_figure(task, "hardest", m)[name] for m in ("success", "progress", *SAFETY_FIGURES)}
+      lines.append(f"| {task} | baseline {name} | " + " | ".join(f"{fig[m]:.3f}" for m in fig) + " |")
+    for group, t, budget in results.trained_groups():
+      if t == task:
+        fig = {m: results.final(group, task, budget, "hardest", m) for m in ("success", "progress", *SAFETY_FIGURES)}
+        lines.append(f"| {task} | {group} @ {budget_text(budget)} (mean of {len(fig['success'])} seeds) | " +
+                     " | ".join(f"{v.mean():.3f}" if len(v) else "-" for v in fig.values()) + " |")
+    lines.append(f"| {task} | **{'saturated' if saturated(success) else 'not saturated'}** | | | | |")
+  return head + lines if lines else []
 
 
 def attempts_lines(results: StudyResults) -> list[str]:
@@ -152,6 +183,14 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
     out += ["## The rest of the evaluation suite", "",
             f"Held-out configurations (`{HELD_OUT}NAME`), each terrain kind's hardest (`{HARDEST}KIND`) and "
             f"each navigation area (`{NAV}KIND`): IQM over seeds [{LEVEL:.0%} CI].", "", *suite, ""]
+  base = baseline_table(results)
+  if base:
+    out += ["## Baselines", "",
+            "Policies that ignore learning, on each task's hardest scene (mean over their trials): "
+            + "; ".join(f"`{b.name}`: {b.meaning}" for b in BASELINES.values() if b.name in spec.baselines)
+            + f". A task is **saturated** when a constant baseline ({', '.join(CONSTANT)}) succeeds in at least "
+            f"{SATURATED:.0%} of those trials: success there does not tell a trained policy from a trivial one.",
+            "", *base, ""]
   if spec.compare:
     rows = improvement_table(results)
     out += ["## Probability of improvement", "",

@@ -14,7 +14,7 @@ from mjx_tracks.metrics import EPISODE_NAMES, REPORT_NAMES
 from train.db import ExperimentDB
 from train.run_record import run_id_in
 from train.study.executor import STUDY_DB, cell_folder_of, read_cells
-from train.study.spec import Cell, StudySpec, cells, load_study
+from train.study.spec import BASELINE_GROUP, Cell, StudySpec, cells, load_study
 
 SPEC_FILE = "study.yaml"  # the study's spec as it ran, written into its folder
 EVAL_METRICS = tuple(n for n in EPISODE_NAMES if n != "length")  # per trial (mjx_tracks.metrics.EPISODE)
@@ -40,7 +40,21 @@ class StudyResults:
     """(group, task, budget) of every finished run's evaluations, in the spec's order."""
     seen = {(r.cell.group, r.cell.task, b) for r in self.runs for b in r.cell.budgets()}
     order = [(g.name, t, b) for g in self.spec.groups for t in self.spec.tasks for b in sorted(set(g.steps))]
+    order += [(BASELINE_GROUP + n, t, 0) for t in self.spec.tasks for n in self.spec.baselines]  # budget 0
     return [k for k in order if k in seen]
+
+  def trained_groups(self) -> list[tuple[str, str, int]]:
+    """groups() less the baselines'."""
+    return [k for k in self.groups() if not k[0].startswith(BASELINE_GROUP)]
+
+  def baseline_figure(self, task: str, scene: str, metric: str) -> dict[str, float]:
+    """{baseline name: its mean of `metric` over its trials on the scene} for one task."""
+    out = {}
+    for n in self.spec.baselines:
+      fig = self.final(BASELINE_GROUP + n, task, 0, scene, metric)
+      if len(fig):
+        out[n] = float(fig[0])
+    return out
 
   def scenes(self) -> list[str]:
     """Evaluation scenes of the finished runs: hardest, uniform, then the others by name."""

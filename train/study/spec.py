@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import pathlib
 
+from mjx_tracks.baselines import ALGO as BASELINE_ALGO, BASELINES, baselines_for
 from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config, load_yaml,
                                     parse_mapping, require, require_plain_name, show)
 from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
@@ -14,7 +15,7 @@ from train.early_stop import parse_early_stop
 from train.evaluation import EVAL_TRIALS
 from train.presets import get_preset
 
-STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": []}
+STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES)}
 GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu", "budgets": "runs", "tasks": []}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
@@ -43,6 +44,7 @@ class StudySpec:
   retries: int  # attempts after a failed one, each from the run's last checkpoint
   eval_trials: int  # trials per evaluation scene of every finished run
   compare: tuple[tuple[str, str], ...]  # task pairs (A, B): the report's probability that A beats B
+  baselines: tuple[str, ...]  # mjx_tracks.baselines evaluated on each task they can drive, beside the groups
 
 
 @dataclasses.dataclass(frozen=True)
@@ -62,6 +64,16 @@ class Cell:
   @property
   def id(self) -> str:
     return f"{self.group}/{self.task}/{self.steps}/s{self.seed}"
+
+  @property
+  def is_baseline(self) -> bool:
+    """A baseline's evaluation (no training): its preset names the baseline."""
+    return self.algo == BASELINE_ALGO
+
+  def eval_args(self, trials: int) -> list[str]:
+    """`python -m train.evaluate RUN` arguments of this cell's evaluation suite, less the database."""
+    own = ["--baseline", self.preset, "--task", self.task] if self.is_baseline else []
+    return [*own, "--suite", "--trials", str(trials)] + (["--milestones"] if self.milestones else [])
 
   def train_args(self) -> list[str]:
     """`python -m train.run` arguments of this cell, less its run folder and database."""
@@ -144,6 +156,9 @@ def study_from_dict(raw: dict) -> StudySpec:
   _check_tasks(spec)
   runs = len(spec.seeds) * sum(len(group_tasks(spec, g)) * len(runs_of(g)) for g in spec.groups)
   require(runs <= MAX_STUDY_RUNS, "study", f"{runs:,} runs; at most {MAX_STUDY_RUNS:,}")
+  unknown = [b for b in spec.baselines if b not in BASELINES]
+  require(not unknown and len(set(spec.baselines)) == len(spec.baselines), "baselines",
+          lambda: f"distinct names of {list(BASELINES)}, got {show(list(spec.baselines))}")
   for i, pair in enumerate(spec.compare):
     require(pair[0] != pair[1] and set(pair) <= set(spec.tasks), f"compare[{i}]",
             lambda: f"two different tasks of the study, got {show(list(pair))}")
@@ -178,7 +193,14 @@ def runs_of(g: GroupSpec) -> list[tuple[int, tuple[int, ...]]]:
   return [(steps, ()) for steps in g.steps]
 
 
+BASELINE_GROUP = "baseline-"  # + the baseline's name: the group of its cells
+
+
 def cells(spec: StudySpec) -> list[Cell]:
-  """The study's runs: group x task x budget x seed, in that order."""
-  return [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones)
-          for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g) for seed in spec.seeds]
+  """The study's runs: group x task x budget x seed, in that order; then one evaluation of each
+  baseline on each task it can drive (its trials vary by themselves; seed: the study's first)."""
+  trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones)
+             for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g)
+             for seed in spec.seeds]
+  return trained + [Cell(BASELINE_GROUP + name, task, 0, spec.seeds[0], BASELINE_ALGO, name, "", (), "gpu")
+                    for task in spec.tasks for name in baselines_for(load_config(task), spec.baselines)]
