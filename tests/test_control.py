@@ -92,3 +92,27 @@ def test_the_dof_curriculum_holds_locked_joints_at_their_targets_until_eps_reach
     for part in acting:
       expected[part] = np.asarray(moved)[part]
     np.testing.assert_allclose(t, expected, atol=1e-6, err_msg=f"eps {eps}")
+
+
+@pytest.mark.parametrize("mode, increments", [("5dof_stairs", True), ("5dof_stairs", False), ("4dof", True),
+                                              ("3dof_stairs", True)])
+def test_encode_is_decodes_inverse_for_reachable_commands(mode, increments):
+  """A scripted controller's (v, w, targets) through encode then decode come back (within one step's
+  increment); farther targets are approached by a full increment."""
+  robot = ABSOLEM if mode == "3dof_stairs" else JAGUAR
+  c = Controller.create(robot, mode, increments=increments)
+  prev = jnp.asarray(np.linspace(-0.2, 0.2, len(robot.joint_names())), jnp.float32)
+  near = prev + 0.5 * INCREMENT * jnp.sign(jnp.arange(len(prev)) % 2 - 0.5)
+  for group in ("front", "rear", "arm_1", "arm_2"):  # a group's joints share a target
+    idx = robot.joint_index(group)
+    if len(idx):
+      near = near.at[idx].set(near[idx[0]])
+      prev = prev.at[idx].set(prev[idx[0]])
+  driven = np.asarray(c.drive).sum(axis=1) > 0
+  v, w, t = c.decode(c.encode(jnp.float32(0.3), jnp.float32(0.2), near, prev), prev)
+  assert float(v) == pytest.approx(0.3, abs=1e-6)
+  assert float(w) == pytest.approx(0.2 if "w" in c.dims else 0.0, abs=1e-6)
+  np.testing.assert_allclose(np.asarray(t)[driven], np.asarray(near)[driven], atol=1e-5)
+  if increments:  # a target two increments away: one full increment toward it
+    _, _, t = c.decode(c.encode(jnp.float32(0.3), jnp.float32(0.0), prev + 2 * INCREMENT, prev), prev)
+    np.testing.assert_allclose(np.asarray(t)[driven], np.minimum(np.asarray(prev + INCREMENT), np.asarray(c.joint_limits[:, 1]))[driven], atol=1e-5)

@@ -102,3 +102,28 @@ def test_on_stairs_window_spans_the_staircase_plus_the_margin():
   inside = jnp.array([-m + 0.01, 0.0, 1.0, 2.1 + m - 0.01])
   outside = jnp.array([-m - 0.01, -1.0, 2.1 + m + 0.01, 5.0])
   assert bool(jnp.all(on_stairs(inside, top))) and not bool(jnp.any(on_stairs(outside, top)))
+
+
+def test_the_episode_mean_form_sums_to_the_episodes_mean_sample_whatever_its_length():
+  """Per step, the change of the running mean (the newest sample first in the window); over an
+  episode, the mean of its samples (hand-computed); the window form reads the window's mean."""
+  samples = [0.4, 0.1, 0.0, 0.7, 0.3, 0.2, 0.5]
+  mon = Monitor(RewardConfig(kind="angular", safety_form="episode_mean", safety_window=3), EP)
+  window, total, rates = jnp.zeros(3), 0.0, []
+  for t, x in enumerate(samples, 1):
+    window, total = jnp.roll(window, 1).at[0].set(x), total + x
+    rates.append(float(mon.safety_rate(window, jnp.float32(total), jnp.int32(t))))
+  assert rates[0] == pytest.approx(0.4) and rates[1] == pytest.approx(0.25 - 0.4)
+  assert sum(rates) == pytest.approx(np.mean(samples), abs=1e-6)
+  assert sum(rates[:4]) == pytest.approx(np.mean(samples[:4]), abs=1e-6)  # an episode cut short: its own mean
+  paper = Monitor(RewardConfig(kind="angular", safety_form="window", safety_window=3), EP)
+  assert float(paper.safety_rate(window, jnp.float32(total), jnp.int32(7))) == pytest.approx(np.mean(samples[-3:]))
+
+
+def test_reaching_the_goal_earns_the_goal_bonus_once_it_is_reached():
+  mon = Monitor(RewardConfig(goal_bonus=0.5), EP)
+  reached, *_ = mon.evaluate(jnp.float32(-0.01), jnp.float32(0.1), jnp.float32(2.0), jnp.zeros(3), jnp.float32(0.0),
+                             jnp.float32(1.0))
+  short, *_ = mon.evaluate(jnp.float32(0.01), jnp.float32(0.1), jnp.float32(2.0), jnp.zeros(3), jnp.float32(0.0),
+                           jnp.float32(1.0))
+  assert float(reached["goal"]) == 0.5 and float(short["goal"]) == 0.0

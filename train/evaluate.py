@@ -61,7 +61,7 @@ def _baseline_record(args) -> dict:
   """The run record of a baseline's folder: the one there, or a new one (and its database row)."""
   if args.task not in available_tasks():
     raise ValueError(f"--baseline needs --task, one of {', '.join(available_tasks())}; got {args.task!r}")
-  cfg = load_config(args.task)
+  cfg = load_config(args.task, tuple(args.set))
   b = baseline(args.baseline)
   if not b.applies(cfg):
     raise ValueError(f"baseline {b.name!r} ({b.meaning}) cannot drive {args.task}")
@@ -103,6 +103,8 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--baseline", choices=tuple(BASELINES), help="evaluate a baseline policy on --task instead of "
                  "a trained one (mjx_tracks.baselines)")
   p.add_argument("--task", help="with --baseline: the task")
+  p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                 help="with --baseline: a config override of the task (as train.run's)")
   p.add_argument("--trials", type=int, default=EVAL_TRIALS)
   p.add_argument("--scene", default="hardest", help=f"one of {', '.join(SCENES)}, {HELD_OUT}NAME "
                  f"(a fixed configuration of the task's evaluation section), {HARDEST}KIND (a terrain kind "
@@ -215,8 +217,9 @@ def main(argv: list[str] | None = None) -> int:
   try:
     if args.baseline:
       meta = _baseline_record(args)
-    elif args.run_dir is None or args.task:
-      raise ValueError("give a RUN_DIR to evaluate a trained run, or --baseline NAME --task TASK")
+    elif args.run_dir is None or args.task or args.set:
+      raise ValueError("give a RUN_DIR to evaluate a trained run (its config is recorded), or --baseline NAME "
+                       "--task TASK [--set KEY=VALUE ...]")
     else:
       meta = read_run_record(args.run_dir)
     cfg = from_dict(meta["config"])

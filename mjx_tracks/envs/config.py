@@ -262,6 +262,7 @@ class RewardConfig:
   cog_scale: float = dataclasses.field(metadata=bound(0.0))  # per-step COG deviation penalty weight (1/m)
   angular_scale: float = dataclasses.field(metadata=bound(0.0))  # per-step |pitch rate| penalty weight (s/rad)
   tipover_penalty: float = dataclasses.field(metadata=bound(0.0))
+  goal_bonus: float = dataclasses.field(metadata=bound(0.0))  # reward on reaching the goal
   normalize_penalties: bool  # the original's K = 1 / mean penalty sum of the first episodes
   normalize_episodes: int = dataclasses.field(metadata=bound(1))
   safety_window: int = dataclasses.field(metadata=bound(1))  # samples averaged by the penalty
@@ -510,6 +511,7 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("scene", "terrain", "spiral_up"): FROM_DEFAULTS, ("scene", "terrain", "spiral_down"): FROM_DEFAULTS,
               ("scene", "start_jitter"): [0.0, 0.0, 0.0],  # before start jitter: the fixed spawn
               ("reward", "safety_form"): "window",  # before safety forms: the paper's window
+              ("reward", "goal_bonus"): 0.0,  # before the goal term: none
               ("evaluation", "trial_variation"): FROM_DEFAULTS,  # evaluation only: old runs are evaluated as today's
               ("evaluation", "held_out_terrain"): FROM_DEFAULTS}  # evaluation only: old runs get today's
 

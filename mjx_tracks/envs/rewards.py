@@ -15,6 +15,8 @@ policy that hurries pays less); `episode_mean`, scale * K * (M_t - M_{t-1}) with
 episode's first t samples, whose sum over an episode is scale * K * the episode's mean sample: the
 very figure evaluation reports, whatever the episode's length. K = 1, or with normalize_penalties
 the original's K = 1 / mean per-episode penalty sum of the first N episodes (no penalty during those N).
+Goal: reaching the goal earns goal_bonus once (it ends the episode): with a length-neutral safety
+penalty, the only thing that makes running out of time cost more than the last metres of progress.
 Tip-over: |roll| or |pitch| > pi/2 costs tipover_penalty and ends the episode. The episode also
 ends when the goal is reached (dist < 0) or the robot moved away (dist > away_factor * d0).
 """
@@ -131,5 +133,6 @@ class Monitor:
         "progress": self.reward.progress_scale * progress,
         "safety": -self.safety_scale() * k * rate,
         "tipover": -self.reward.tipover_penalty * tipped.astype(jnp.float32),
+        "goal": self.reward.goal_bonus * reached.astype(jnp.float32),
     }
     return terms, progress, closest, tipped | reached | away, {"tipped": tipped, "reached": reached, "away": away}
