@@ -101,3 +101,18 @@ def test_time_of_updates_still_running_when_an_evaluation_starts_counts_as_train
   rates = [r["steps_per_s"] for r in reporter.rows if r["source"] == "train"]
   # 100 steps per >= 50 ms wait; the first window holds one wait (its second is the next one's)
   assert len(rates) == 5 and rates[0] < 4_100 and all(r < 2_100 for r in rates[1:]), rates
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["--task", "asc-inc-cog", "--preset", "gpu"], "success=0.97x2"),  # the GPU main command stops once solved
+    (["--task", "asc-inc-cog", "--preset", "gpu", "--early-stop", "none"], None),
+    (["--task", "asc-inc-cog", "--preset", "gpu", "--early-stop", "return"], "return=0.5"),
+    (["--task", "nav", "--preset", "gpu"], None),  # no hardest scene to be solved on
+    (["--task", "asc-inc-cog", "--preset", "laptop"], None),
+    (["--task", "des-inc-ang", "--algo", "sac", "--preset", "paper"], None)])
+def test_the_preset_says_when_a_run_stops_unless_the_command_line_does(argv, expected, tmp_path):
+  from train.plan import plan_run
+  from train.run import parser
+  plan = plan_run(parser().parse_args([*argv, "--out", str(tmp_path / "run")]))
+  assert (str(plan.early_stop) if plan.early_stop else None) == expected
+  assert plan.probe_every > 0 or expected is None

@@ -74,7 +74,7 @@ def test_the_shipped_studies_validate_and_the_command_lists_their_runs(capsys):
   assert len(paper) == 4 * 5 * 3  # SAC with and without early stop; PPO's 4 budgets: milestones of one run
   ppo = [c for c in paper if c.group == "ppo"]
   assert {c.budgets() for c in ppo} == {(250_000, 500_000, 1_000_000, 2_000_000)}
-  assert all(c.train_args()[-2:] == ["--milestones", "250000,500000,1000000"] for c in ppo)
+  assert all(c.train_args()[-4:] == ["--milestones", "250000,500000,1000000", "--early-stop", "none"] for c in ppo)
   assert study_main([str(STUDIES / "tiny.yaml"), "--plan", "--set", "seeds=[7]"]) == 0
   lines = capsys.readouterr().out.splitlines()
   assert len(lines) == 1 + 2 + 2 * 4 and all("--seed 7 " in line for line in lines[1:3])

@@ -10,6 +10,7 @@ import dataclasses
 from scenes.kinds import scene_kind
 from train.db import STAT_SOURCES
 
+NO_EARLY_STOP = "none"  # --early-stop none: train every step whatever the preset says
 EARLY_STOP_SUCCESS = 0.97  # success on the hardest staircase
 # reports in a row that must meet a criterion: two probes for success, since a policy that just
 # reached 0.97 in one probe can score a few trials less in another compilation of the same trials

@@ -12,7 +12,7 @@ from typing import Any
 
 from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
 from mjx_tracks.limits import MAX_ENVS, MAX_SEED, MAX_STEPS
-from train.early_stop import EarlyStop, parse_early_stop
+from train.early_stop import NO_EARLY_STOP, EarlyStop, parse_early_stop
 from train.presets import CPU_DEFAULT, get_preset
 from train.run_record import read_run_record, run_id_in, write_run_record
 
@@ -155,7 +155,7 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     what = f"run {other}" if other else "other files"
     raise RunError(f"{out_dir} already holds {what}; use --resume {out_dir} or another --out")
   try:
-    early = parse_early_stop(args.early_stop, cfg) if args.early_stop else None
+    early = _early_stop(args.early_stop, preset, cfg)
   except ValueError as e:
     raise RunError(str(e))
   probe_every = _probe_every(args.probe_every, early, preset, cfg)
@@ -175,6 +175,16 @@ def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:
   if not budgets or budgets[0] < 1 or budgets[-1] >= total:
     raise RunError(f"--milestones must lie in [1, {total:,}) (the run's --steps); got {text!r}")
   return tuple(budgets)
+
+
+def _early_stop(given: str | None, preset, cfg) -> EarlyStop | None:
+  """The criterion given, else the preset's (PPO gpu: success on the hardest scene, for tasks that
+  have one); None for 'none'."""
+  if given == NO_EARLY_STOP:
+    return None
+  if given is None:
+    given = preset.early_stop if preset.early_stop and cfg.scene.has_hardest else None
+  return parse_early_stop(given, cfg) if given else None
 
 
 def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int:

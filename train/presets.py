@@ -31,6 +31,8 @@ class PPOPreset:
   probe_steps: int = 81_920  # steps between hardest-staircase probes (train.probe); 0: none unless asked
   run_evals: bool = True  # brax's evaluation on a separate env (uniform scenes) at each eval point
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=1024",)
+  # train.run's --early-stop unless one is given (tasks with a hardest configuration): stop once solved
+  early_stop: str = "success"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,6 +54,7 @@ class SACPreset:
   num_evals: int = 10
   num_eval_envs: int = 256
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=256",)
+  early_stop: str = ""  # train.run's --early-stop unless one is given ("": none)
 
 
 PRESETS: dict[str, dict[str, object]] = {
@@ -59,12 +62,14 @@ PRESETS: dict[str, dict[str, object]] = {
         "cpu": PPOPreset(num_envs=16, num_timesteps=2_560, unroll_length=8, batch_size=16,
                          num_minibatches=4, num_updates_per_batch=2, policy_hidden=(32, 32),
                          value_hidden=(32, 32), num_evals=2, num_eval_envs=8,
-                         training_metrics_steps=512, probe_steps=0, run_evals=False, config_overrides=()),
+                         training_metrics_steps=512, probe_steps=0, run_evals=False, config_overrides=(),
+                         early_stop=""),
         # the GPU preset's networks and update shape at 256 robots: 5,120 steps per update, 8 updates
         # (at ~115 steps/s on 2 cores: under 8 minutes with the compilation; results/first_run/)
         "laptop": PPOPreset(num_envs=256, num_timesteps=40_960, unroll_length=20, batch_size=64,
                             num_minibatches=4, num_updates_per_batch=4, num_evals=2, num_eval_envs=8,
-                            training_metrics_steps=5_120, probe_steps=0, run_evals=False, config_overrides=()),
+                            training_metrics_steps=5_120, probe_steps=0, run_evals=False, config_overrides=(),
+                            early_stop=""),
         "gpu": PPOPreset(),
     },
     "sac": {

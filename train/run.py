@@ -47,7 +47,8 @@ def parser() -> argparse.ArgumentParser:
                  help="stop at a criterion: 'return' (alone: the mean return of recent training episodes "
                       "reaches the paper's 0.5 ascent / 0.6 descent), 'success' (the hardest-staircase "
                       f"probe's success reaches {EARLY_STOP_SUCCESS} in {EARLY_STOP_TIMES['success']} probes "
-                      "in a row), or either with =THRESHOLD[xN] (N reports in a row)")
+                      "in a row), or either with =THRESHOLD[xN] (N reports in a row); 'none': train every "
+                      "step (default: the preset's: PPO gpu stops at 'success' on tasks with a hardest scene)")
   p.add_argument("--probe-every", type=int, metavar="STEPS",
                  help="steps between evaluations on the hardest staircase (the trials of train.evaluate "
                       "--scene hardest); 0: none (default: the preset's, stair tasks only)")

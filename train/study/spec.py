@@ -11,7 +11,7 @@ from mjx_tracks.baselines import ALGO as BASELINE_ALGO, BASELINES, baselines_for
 from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config, load_yaml,
                                     parse_mapping, require, require_plain_name, show)
 from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
-from train.early_stop import parse_early_stop
+from train.early_stop import NO_EARLY_STOP, parse_early_stop
 from train.evaluation import EVAL_TRIALS
 from train.presets import get_preset
 
@@ -83,7 +83,7 @@ class Cell:
       args += ["--set", item]
     if self.milestones:
       args += ["--milestones", ",".join(map(str, self.milestones))]
-    return args + (["--early-stop", self.early_stop] if self.early_stop else [])
+    return args + ["--early-stop", self.early_stop or NO_EARLY_STOP]  # the group's, not the preset's
 
   def budgets(self) -> tuple[int, ...]:
     """The step budgets this run's evaluations stand for."""
