@@ -118,3 +118,18 @@ def test_the_openapi_document_lists_every_endpoint(served):
   docs = client.get("/docs")
   assert docs.status_code == 200 and "/openapi.json" in docs.text
   assert "http" not in docs.text.replace("http-equiv", "")  # nothing loaded from the internet
+
+
+def test_compare_puts_the_baselines_of_the_same_tasks_beside_the_runs(served):
+  """Each scene's row: the runs' means, and each baseline run (algo 'baseline') of a compared run's
+  task on that scene; a baseline of another task is left out."""
+  settings, _ = served
+  db = ExperimentDB(settings.db)
+  for run_id, task, name, success in (("full-asc", "asc-inc-cog", "full", 1), ("zero-des", "des-inc-ang", "zero", 0)):
+    db.start(run_id, task, "baseline", name, 0, {}, settings.runs_root, 0)
+    db.log_evals(run_id, [{"scene": "hardest", "trial": i, "progress": 1.0, "success": success,
+                           "cog_deviation": 0.1, "pitch_rate": 0.6, "tipped_over": 0, "length": 10} for i in range(3)])
+    db.finish(run_id, "done")
+  (row,) = TestClient(create_app(settings), base_url=LOCAL).get("/api/compare", params={"run": "a"}).json()
+  assert row["scene"] == "hardest" and row["per_run"]["a"]["success"] == 0.5
+  assert row["baselines"] == {"full": {"success": 1.0, "progress": 1.0, "pitch_rate": pytest.approx(0.6)}}
