@@ -61,6 +61,8 @@ def test_a_baseline_is_evaluated_and_recorded_like_a_run_and_its_trials_are_samp
   assert evaluate.main(args) == 0  # again: the same folder and run
   assert json.load(open(os.path.join(out, "run.json")))["run_id"] == meta["run_id"]
   capsys.readouterr()
+  assert evaluate.main([*args[:-1], "--set", "episode.max_steps=9", out]) == 2  # the folder's settings differ
+  assert "other settings" in capsys.readouterr().err
   assert evaluate.main(["--baseline", "scripted", "--task", "nav", "--db", db, str(tmp_path / "n")]) == 2
   assert "cannot drive nav" in capsys.readouterr().err
   assert evaluate.main(["--baseline", "zero", "--task", "asc-inc-cog", "--db", db, out]) == 2  # another baseline's folder

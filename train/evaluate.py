@@ -71,6 +71,9 @@ def _baseline_record(args) -> dict:
     if (meta["algo"], meta.get("preset"), meta["task"]) != (BASELINE_ALGO, b.name, args.task):
       raise ValueError(f"{args.run_dir} holds {meta['task']} {meta['algo']} {meta.get('preset')}, not baseline "
                        f"{b.name} on {args.task}")
+    if from_dict(meta["config"]) != cfg:
+      raise ValueError(f"{args.run_dir} holds baseline {b.name} on {args.task} with other settings (--set); "
+                       "give another folder")
     return meta
   import secrets  # noqa: PLC0415
   meta = {"run_id": f"{args.task}-{BASELINE_ALGO}-{b.name}-{secrets.token_hex(3)}", "task": args.task,
