@@ -16,7 +16,7 @@ FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
 STUDY = {"name": "nb", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1, 2], "eval_trials": 4,
          "groups": [{"name": "g", "algo": "ppo", "preset": "cpu", "steps": [200, 400], "budgets": "milestones",
                      "backend": "cpu"}],
-         "compare": [["asc-inc-cog", "asc-uni-cog"]]}
+         "compare": [["asc-inc-cog", "asc-uni-cog"]], "baselines": ["full"]}
 
 
 def _run(name: str) -> nbformat.NotebookNode:
@@ -37,11 +37,11 @@ def test_the_study_notebook_runs_on_a_study_made_here(tmp_path, monkeypatch):
                     dashboard_address=":0") as cluster, Client(cluster) as client:
     counts = StudyRunner(study_from_dict(STUDY), str(folder), client, ((FAKE, "train"), (FAKE, "evaluate")),
                          backends=("cpu",)).run()
-  assert counts["done"] == 6
+  assert counts["done"] == 6 + 2  # and the full-throttle baseline on each task
   monkeypatch.setenv("MJX_TRACKS_STUDY", str(folder))
   nb = _run("study.ipynb")
   text = _outputs(nb)
-  assert "6 runs: 6 done" in text and "('g', 'asc-inc-cog', 200)" in text
+  assert "8 runs: 8 done" in text and "('g', 'asc-inc-cog', 200)" in text
   images = sum("image/png" in o.get("data", {}) for c in nb.cells if c.cell_type == "code" for o in c.outputs)
   assert images == 3  # final metrics, curves, per-trial histogram of the one group
 

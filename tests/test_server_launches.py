@@ -145,6 +145,7 @@ seeds: [0, 1]
 eval_trials: 4
 groups:
   - {name: g, algo: ppo, preset: cpu, steps: [200], backend: cpu}
+baselines: []
 """
 
 

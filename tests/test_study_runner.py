@@ -70,7 +70,8 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
     for c in cells(spec):
       run = cell_folder(folder, c)
       if c.is_baseline:  # evaluated only, once
-        assert not os.path.exists(os.path.join(run, "checkpoints")) and len(state[c.id]["attempts"]) == 1
+        assert not os.path.exists(os.path.join(run, "checkpoints")) and state[c.id]["status"] == "done"
+        assert not any(a["train"] for a in state[c.id]["attempts"])
         assert json.load(open(os.path.join(run, "run.json")))["run_id"] == f"{c.task}-baseline-full"
         continue
       assert os.path.exists(os.path.join(run, "eval-hardest.json")) and os.path.isdir(os.path.join(run, "checkpoints", "400"))
