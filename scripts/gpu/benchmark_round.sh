@@ -17,8 +17,8 @@ train() {  # NAME TASK ARGS...
     --db "$runs/experiments.sqlite" "$@" > "$runs/$name.log" 2>&1
   python3 -m train.evaluate "$runs/$name" --scene hardest --trials 100 --db "$runs/experiments.sqlite" >> "$runs/$name.log" 2>&1
 }
-train des-mean1 des-inc-ang --seed 0 --set reward.safety_form=episode_mean --set reward.angular_scale=1.0 &
-train des-mean3 des-inc-ang --seed 0 --set reward.safety_form=episode_mean --set reward.angular_scale=3.0 &
+train des-mean1 des-inc-ang --seed 0 --early-stop none --set reward.safety_form=episode_mean --set reward.angular_scale=1.0 &
+train des-mean3 des-inc-ang --seed 0 --early-stop none --set reward.safety_form=episode_mean --set reward.angular_scale=3.0 &
 train asc-hard asc-hard --seed 0 --steps 8000000 --early-stop success &
 wait
 for f in "$runs"/*.log; do tail -3 "$f"; done
