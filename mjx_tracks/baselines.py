@@ -17,9 +17,8 @@ from __future__ import annotations
 import dataclasses
 from typing import TYPE_CHECKING, Callable
 
-import jax
-import jax.numpy as jnp
-
+# JAX is imported where a baseline acts, so that study specs and the dashboard that name baselines
+# start without it
 if TYPE_CHECKING:
   from mjx_tracks.envs.config import TaskConfig
   from mjx_tracks.envs.task_env import TrackedRobotEnv
@@ -40,18 +39,24 @@ class Baseline:
 
 def _constant(speed: float):
   def make(core):
+    import jax.numpy as jnp  # noqa: PLC0415
     action = jnp.zeros(core.action_size).at[0].set(speed)  # action 0 is v in every control mode
     return lambda states: jnp.broadcast_to(action, (states.obs.shape[0], core.action_size))
   return make
 
 
 def _random(core):
+  import jax  # noqa: PLC0415
+
   def one(key):
     return jax.random.uniform(jax.random.fold_in(key, RANDOM_STREAM), (core.action_size,), minval=-1.0, maxval=1.0)
   return lambda states: jax.vmap(one)(states.pipeline_state.key)
 
 
 def _scripted(core):
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+
   from mjx_tracks.sim.pose import chassis_rpy  # noqa: PLC0415
   from mjx_tracks.tools.scripted import StairScript  # noqa: PLC0415
   script, robot, c = StairScript(core.cfg.scene.direction), core.robot, core.controller
