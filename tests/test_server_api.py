@@ -125,11 +125,14 @@ def test_compare_puts_the_baselines_of_the_same_tasks_beside_the_runs(served):
   task on that scene; a baseline of another task is left out."""
   settings, _ = served
   db = ExperimentDB(settings.db)
-  for run_id, task, name, success in (("full-asc", "asc-inc-cog", "full", 1), ("zero-des", "des-inc-ang", "zero", 0)):
+  for run_id, task, name, success in (("full-asc", "asc-inc-cog", "full", 1), ("full-des", "des-inc-ang", "full", 0)):
     db.start(run_id, task, "baseline", name, 0, {}, settings.runs_root, 0)
     db.log_evals(run_id, [{"scene": "hardest", "trial": i, "progress": 1.0, "success": success,
                            "cog_deviation": 0.1, "pitch_rate": 0.6, "tipped_over": 0, "length": 10} for i in range(3)])
     db.finish(run_id, "done")
   (row,) = TestClient(create_app(settings), base_url=LOCAL).get("/api/compare", params={"run": "a"}).json()
   assert row["scene"] == "hardest" and row["per_run"]["a"]["success"] == 0.5
-  assert row["baselines"] == {"full": {"success": 1.0, "progress": 1.0, "pitch_rate": pytest.approx(0.6)}}
+  assert row["baselines"] == {"asc-inc-cog/full": {"success": 1.0, "progress": 1.0, "pitch_rate": pytest.approx(0.6)}}
+  (row,) = TestClient(create_app(settings), base_url=LOCAL).get("/api/compare", params={"run": ["a", "b"]}).json()
+  assert set(row["baselines"]) == {"asc-inc-cog/full", "des-inc-ang/full"}  # one name, two tasks: both kept
+  assert row["baselines"]["des-inc-ang/full"]["success"] == 0.0

@@ -20,7 +20,8 @@ REPS = 500  # bootstrap resamples: rliable takes ~0.3 s per figure at the report
 
 @router.get("/compare")
 def compare(request: Request, run: list[str] = Query(...)) -> list[dict]:
-  """[{scene, budget, runs, per_run: {run: {metric: mean}}, iqm: {metric: [IQM, low, high]}}]."""
+  """[{scene, budget, runs, per_run: {run: {metric: mean}}, iqm: {metric: [IQM, low, high]},
+  baselines: {TASK/NAME: {metric: mean}}}]."""
   if len(run) > MAX_COMPARE_RUNS:
     raise HTTPException(status_code=422, detail=f"compare at most {MAX_COMPARE_RUNS} runs at once, got {len(run)}")
   db = db_of(request)
@@ -28,7 +29,7 @@ def compare(request: Request, run: list[str] = Query(...)) -> list[dict]:
   tasks = {run_or_404(db, run_id)["task"] for run_id in run}
   for run_id in run:
     per.update({k: {**per.get(k, {}), run_id: v} for k, v in _means(db, run_id).items()})
-  base = {b["preset"]: _means(db, b["run_id"]) for b in db.runs()
+  base = {f"{b['task']}/{b['preset']}": _means(db, b["run_id"]) for b in db.runs()  # TASK/NAME: tasks may differ
           if b["algo"] == BASELINE_ALGO and b["task"] in tasks and b["run_id"] not in run}
   out = []
   for (scene, budget), runs in per.items():

@@ -130,8 +130,9 @@ SAFETY_FIGURES = ("pitch_rate", "cog_deviation")  # the tasks' own safety figure
 
 
 def baseline_table(results: StudyResults) -> list[str]:
-  """Per task: each baseline's success and safety figures on the hardest scene, the best trained
-  group's beside them, and whether the task is saturated (a constant baseline reaches SATURATED)."""
+  """Per task: each baseline's success and safety figures on the hardest scene, every trained
+  group's beside them (mean over seeds), and whether the task is saturated (a constant baseline
+  reaches SATURATED)."""
   head = ["| task | policy | success hardest | progress hardest | " +
           " | ".join(f"{m.replace('_', ' ')} hardest" for m in SAFETY_FIGURES) + " |", "|---" * (4 + len(SAFETY_FIGURES)) + "|"]
   lines = []
@@ -147,7 +148,7 @@ def baseline_table(results: StudyResults) -> list[str]:
         fig = {m: results.final(group, task, budget, "hardest", m) for m in ("success", "progress", *SAFETY_FIGURES)}
         lines.append(f"| {task} | {group} @ {budget_text(budget)} (mean of {len(fig['success'])} seeds) | " +
                      " | ".join(f"{v.mean():.3f}" if len(v) else "-" for v in fig.values()) + " |")
-    lines.append(f"| {task} | **{'saturated' if saturated(success) else 'not saturated'}** | | | | |")
+    lines.append(f"| {task} | **{'saturated' if saturated(success) else 'not saturated'}** |" + " |" * (2 + len(SAFETY_FIGURES)))
   return head + lines if lines else []
 
 
