@@ -13,7 +13,7 @@ from typing import Any
 from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
 from mjx_tracks.limits import MAX_ENVS, MAX_SEED, MAX_STEPS
 from train.early_stop import NO_EARLY_STOP, EarlyStop, parse_early_stop
-from train.presets import CPU_DEFAULT, get_preset
+from train.presets import CPU_DEFAULT, get_preset, with_hyperparams
 from train.run_record import read_run_record, run_id_in, write_run_record
 
 
@@ -39,6 +39,7 @@ class RunPlan:
   probe_every: int  # steps between hardest-staircase probes (0: none)
   start_step: int = 0  # the checkpoint a resumed run continues from
   milestones: tuple[int, ...] = ()  # step budgets at which the policy is exported to RUN/milestones/<budget>
+  hp: tuple[str, ...] = ()  # --hp KEY=VALUE: the preset's fields the run changed (already in preset)
 
 
 def default_preset(algo: str) -> str:
@@ -51,7 +52,7 @@ def default_preset(algo: str) -> str:
 
 
 # options a resumed run takes from its run.json; giving one with --resume is refused
-RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "out", "early_stop", "probe_every",
+RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "hp", "out", "early_stop", "probe_every",
                 "milestones")
 
 
@@ -76,13 +77,14 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   if trained_to(args.resume, total):
     raise RunError(f"run {meta['run_id']} is finished ({done:,} of {meta['total_steps']:,} steps); to train "
                    f"it further: --resume {args.resume} --steps N with N > {done:,}")
-  preset = dataclasses.replace(get_preset(meta["algo"], meta["preset"]), num_envs=meta["num_envs"])
+  hp = tuple(meta.get("hp") or ())  # runs from before --hp recorded none
+  preset = dataclasses.replace(with_hyperparams(get_preset(meta["algo"], meta["preset"]), hp), num_envs=meta["num_envs"])
   _check_devices(meta["num_envs"])
   cfg = from_dict(meta["config"])
   return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
                  preset, meta["seed"], tuple(meta["overrides"]), cfg, total, meta["num_envs"], True,
                  _early_stop_of(meta, cfg), meta.get("probe_every", 0), done,
-                 tuple(meta.get("milestones") or ()))
+                 tuple(meta.get("milestones") or ()), hp)
 
 
 def _early_stop_of(meta: dict, cfg) -> EarlyStop | None:
@@ -134,7 +136,7 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   algo, seed = args.algo or "ppo", 0 if args.seed is None else args.seed
   preset_name = args.preset or default_preset(algo)
   try:
-    preset = get_preset(algo, preset_name)
+    preset = with_hyperparams(get_preset(algo, preset_name), args.hp)
   except ValueError as e:
     raise RunError(str(e))
   overrides = tuple(preset.config_overrides) + tuple(args.set)
@@ -161,7 +163,7 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   probe_every = _probe_every(args.probe_every, early, preset, cfg)
   milestones = parse_milestones(getattr(args, "milestones", None), steps)
   return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
-                 cfg, steps, num_envs, False, early, probe_every, milestones=milestones)
+                 cfg, steps, num_envs, False, early, probe_every, milestones=milestones, hp=tuple(args.hp))
 
 
 def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:
@@ -206,7 +208,7 @@ def write_run_json(plan: RunPlan) -> None:
   """run.json (atomically); a resumed run keeps its creation time."""
   now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
   meta = {"run_id": plan.run_id, "task": plan.task, "algo": plan.algo, "preset": plan.preset_name,
-          "seed": plan.seed, "overrides": list(plan.overrides), "config": plan.cfg.to_dict(),
+          "seed": plan.seed, "overrides": list(plan.overrides), "hp": list(plan.hp), "config": plan.cfg.to_dict(),
           "total_steps": plan.total_steps, "num_envs": plan.num_envs,
           "early_stop": str(plan.early_stop) if plan.early_stop else None, "probe_every": plan.probe_every,
           "milestones": list(plan.milestones),

@@ -6,6 +6,9 @@ the paper's SAC set-up (2 x 64 MLP, initial entropy coefficient 0.5, tau 0.05, g
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
+
+import yaml
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,3 +102,56 @@ def get_preset(algo: str, name: str):
   if name not in PRESETS[algo]:
     raise ValueError(f"unknown preset {name!r} for {algo}; known: {sorted(PRESETS[algo])}")
   return PRESETS[algo][name]
+
+
+# fields --hp may not set: each has its own option, or is not a number
+HP_ELSEWHERE = {"num_envs": "--num-envs", "num_timesteps": "--steps", "config_overrides": "--set",
+                "early_stop": "--early-stop"}
+
+HP_ZERO_OK = {"probe_steps"}  # whole-number fields where 0 means none; the others count from 1
+HP_AT_MOST_ONE = {"discounting", "gae_lambda", "tau", "clipping_epsilon"}
+
+
+def with_hyperparams(preset, items: Sequence[str]):
+  """The preset with KEY=VALUE items (`--hp`) replacing its fields, e.g. `discounting=0.995`,
+  `policy_hidden=[64, 64]`; ValueError in one line naming the key."""
+  changes = {}
+  for item in items:
+    key, sep, text = item.partition("=")
+    key = key.strip()
+    if not sep or not key:
+      raise ValueError(f"--hp takes KEY=VALUE, e.g. discounting=0.995; got {item!r}")
+    if key in HP_ELSEWHERE:
+      raise ValueError(f"--hp {key}: set it with {HP_ELSEWHERE[key]}")
+    names = [f.name for f in dataclasses.fields(preset) if f.name not in HP_ELSEWHERE]
+    if key not in names:
+      raise ValueError(f"--hp {key}: not a hyper-parameter of {type(preset).__name__}; known: {', '.join(names)}")
+    changes[key] = _hp_value(key, text, getattr(preset, key))
+  return dataclasses.replace(preset, **changes)
+
+
+def _hp_value(key: str, text: str, default):
+  """TEXT parsed as YAML and checked against the type of the field's DEFAULT."""
+  try:
+    value = yaml.safe_load(text)
+    if isinstance(default, float) and isinstance(value, str):
+      value = float(value)  # YAML 1.1 reads 1e-3 as text
+  except (yaml.YAMLError, ValueError):
+    value = None
+  if isinstance(default, bool):
+    ok = isinstance(value, bool)
+  elif isinstance(default, int):
+    ok = isinstance(value, int) and not isinstance(value, bool) and value >= (0 if key in HP_ZERO_OK else 1)
+  elif isinstance(default, float):
+    high = 1.0 if key in HP_AT_MOST_ONE else float("inf")
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and 0 <= value <= high
+    value = float(value) if ok else value
+  else:  # layer widths
+    ok = isinstance(value, list) and bool(value) and all(isinstance(v, int) and v > 0 for v in value)
+    value = tuple(value) if ok else value
+  if not ok:
+    want = {bool: "true or false", int: f"a whole number >= {0 if key in HP_ZERO_OK else 1}",
+            float: "a number in [0, 1]" if key in HP_AT_MOST_ONE else "a number >= 0"}.get(
+                type(default), "a list of widths, e.g. [64, 64]")
+    raise ValueError(f"--hp {key}: {want}, got {text!r}")
+  return value

@@ -42,6 +42,8 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--db", help="experiment database (default: experiments.sqlite beside the run directory)")
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                  help="dotted config override, e.g. --set reward.cog_scale=0.5")
+  p.add_argument("--hp", action="append", default=[], metavar="KEY=VALUE",
+                 help="a hyper-parameter of the preset, e.g. --hp discounting=0.995 (train/presets.py names them)")
   p.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its last readable checkpoint")
   p.add_argument("--early-stop", nargs="?", const="return", metavar="CRITERION",
                  help="stop at a criterion: 'return' (alone: the mean return of recent training episodes "

@@ -9,6 +9,8 @@
 # FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
 # its finished runs are skipped. A study still running when the machine goes back resumes the same
 # way from the last pack (its running attempts start again).
+# The study runs from a copy of the tree made at its start (/tmp/studies/src), so later calls, which
+# bring the working tree again, never change the code of a study under way.
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.
 # Usage: [STUDY=paper] WAIT=560 SLOTS_PER_GPU=2 CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu/study.sh [ARGS]
 set -uo pipefail
@@ -24,10 +26,11 @@ running() { [ -f "$pidfile" ] && kill -0 "$(cat "$pidfile")" 2>/dev/null; }
 
 start() {
   mkdir -p "$root"
+  rm -rf "${root:?}/src" && mkdir "$root/src" && tar cf - --exclude=./.whl --exclude=./.bench --exclude=./runs . | tar xf - -C "$root/src"
   if [ -n "${FROM:-}" ]; then rm -rf "${root:?}/$study" && cp -r "$FROM" "$root/$study"; fi
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1) x $(nvidia-smi -L | wc -l)"
   { echo "command: ${cmd[*]}"; echo "device: $device, $(nproc) CPU cores, date: $(date -u +%FT%TZ)"; } | tee -a "$log"
-  setsid bash -c '"$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
+  PYTHONPATH="${PYTHONPATH//$PWD/$root/src}" setsid bash -c 'cd "'"$root/src"'" && "$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
   sleep 2
   pgrep -o -s $! -x python3 >"$pidfile"  # setsid made the shell a session leader: its sid is its pid
 }

@@ -32,15 +32,15 @@ def study_of(spec: dict):
 
 
 def cell_of(spec: dict) -> Cell:
-  """The run a launch spec describes ({task, algo, preset, steps, seed, overrides, early_stop}),
+  """The run a launch spec describes ({task, algo, preset, steps, seed, overrides, hp, early_stop}),
   checked like a study's; ConfigError names the faulty key."""
   group = {"name": "launch", "algo": spec.get("algo", "ppo"), "preset": spec.get("preset", "cpu"),
            "steps": [spec.get("steps", 2048)], "early_stop": spec.get("early_stop", ""),
-           "set": list(spec.get("overrides", [])), "backend": spec.get("backend", "cpu")}
+           "set": list(spec.get("overrides", [])), "hp": list(spec.get("hp", [])), "backend": spec.get("backend", "cpu")}
   study = study_from_dict({"name": "launch", "tasks": [spec.get("task")], "seeds": [spec.get("seed", 0)],
                            "groups": [group], "eval_trials": max(spec.get("eval_trials", EVAL_TRIALS), 1)})
   g = study.groups[0]
-  return Cell(g.name, study.tasks[0], g.steps[0], study.seeds[0], g.algo, g.preset, g.early_stop, g.set, g.backend)
+  return Cell(g.name, study.tasks[0], g.steps[0], study.seeds[0], g.algo, g.preset, g.early_stop, g.set, g.backend, hp=g.hp)
 
 
 class Launcher:

@@ -13,10 +13,10 @@ from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks
 from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
 from train.early_stop import NO_EARLY_STOP, parse_early_stop
 from train.evaluation import EVAL_TRIALS
-from train.presets import get_preset
+from train.presets import get_preset, with_hyperparams
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES)}
-GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "backend": "gpu", "budgets": "runs", "tasks": []}
+GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "hp": [], "backend": "gpu", "budgets": "runs", "tasks": []}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
 
@@ -30,6 +30,7 @@ class GroupSpec:
   steps: tuple[int, ...]  # step budgets: one run each
   early_stop: str  # an --early-stop criterion, or "" for none
   set: tuple[str, ...]  # config overrides KEY=VALUE, after the preset's
+  hp: tuple[str, ...]  # the preset's hyper-parameters KEY=VALUE (train.run --hp)
   backend: str  # gpu | cpu: the workers that run its cells (cpu: e.g. one-robot runs)
   budgets: str  # BUDGETS: runs | milestones
   tasks: tuple[str, ...]  # the study's tasks this group trains; empty: all of them
@@ -60,6 +61,7 @@ class Cell:
   overrides: tuple[str, ...]
   backend: str  # gpu | cpu: which workers run it
   milestones: tuple[int, ...] = ()  # smaller budgets whose policies this run exports and evaluates
+  hp: tuple[str, ...] = ()  # train.run --hp KEY=VALUE
 
   @property
   def id(self) -> str:
@@ -81,6 +83,8 @@ class Cell:
             "--seed", str(self.seed)]
     for item in self.overrides:
       args += ["--set", item]
+    for item in self.hp:
+      args += ["--hp", item]
     if self.milestones:
       args += ["--milestones", ",".join(map(str, self.milestones))]
     return args + ["--early-stop", self.early_stop or NO_EARLY_STOP]  # the group's, not the preset's
@@ -99,12 +103,13 @@ def _group(raw, i: int) -> GroupSpec:
   g = parse_mapping(GroupSpec, {**GROUP_DEFAULTS, **raw}, key)
   require_plain_name(g.name, f"{key}.name")
   try:
-    get_preset(g.algo, g.preset)
+    with_hyperparams(get_preset(g.algo, g.preset), g.hp)
   except ValueError as e:
     raise ConfigError(f"{key}: {e}") from None
   require(bool(g.steps) and all(1 <= n <= MAX_STEPS for n in g.steps), f"{key}.steps",
           f"one or more budgets from 1 to {MAX_STEPS:,}")
   require(len(g.set) <= MAX_OVERRIDES, f"{key}.set", f"at most {MAX_OVERRIDES} overrides")
+  require(len(g.hp) <= MAX_OVERRIDES, f"{key}.hp", f"at most {MAX_OVERRIDES} hyper-parameters")
   require(g.backend in BACKENDS, f"{key}.backend", lambda: f"one of {BACKENDS}, got {show(g.backend)}")
   require(g.budgets in BUDGETS, f"{key}.budgets", lambda: f"one of {BUDGETS}, got {show(g.budgets)}")
   require(g.budgets == "runs" or not g.early_stop, f"{key}.budgets",
@@ -199,7 +204,7 @@ BASELINE_GROUP = "baseline-"  # + the baseline's name: the group of its cells
 def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order; then one evaluation of each
   baseline on each task it can drive (its trials vary by themselves; seed: the study's first)."""
-  trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones)
+  trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones, g.hp)
              for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g)
              for seed in spec.seeds]
   return trained + [Cell(BASELINE_GROUP + name, task, 0, spec.seeds[0], BASELINE_ALGO, name, "", (), "gpu")
