@@ -59,6 +59,7 @@ def main(argv: list[str] | None = None) -> int:
   for name in ("--num-envs", "--steps", "--seed"):
     p.add_argument(name, type=int)
   p.add_argument("--set", action="append", default=[])
+  p.add_argument("--hp", action="append", default=[])
   args = p.parse_args(argv)
   args.resume, args.early_stop, args.probe_every = None, None, 0
   from mjx_tracks import compile_cache  # noqa: PLC0415
