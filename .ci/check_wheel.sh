@@ -20,7 +20,7 @@ assert mjx_tracks.__file__.startswith(sys.argv[1]), f"imported {mjx_tracks.__fil
 tasks = available_tasks()
 assert "asc-inc-cog" in tasks, tasks
 cfg = load_config("asc-inc-cog")
-import train.algos.ppo, train.study.spec  # noqa: E401  (subpackages are listed in pyproject.toml)
+import train.core.algos.ppo, train.study.spec  # noqa: E401  (subpackages are listed in pyproject.toml)
 assert train.study.spec.__file__.startswith(sys.argv[1]), train.study.spec.__file__
 runs = train.study.spec.cells(train.study.spec.load_study("paper"))
 print(f"wheel: {len(tasks)} tasks and the paper study ({len(runs)} runs) load from {sys.argv[1]}")

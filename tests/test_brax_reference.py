@@ -1,23 +1,31 @@
-"""The environment stays a Brax Env: Brax's own ppo.train trains it (train.brax_reference)."""
+"""The environment stays a Brax Env: Brax's own ppo.train trains it (`train.run --library brax`,
+train.core.brax_reference), recorded like any run."""
 
 import json
 import os
+import sqlite3
 
 import numpy as np
 
 from helpers import TRAIN_TINY
-from train import brax_reference
+from train import run
 
 
-def test_brax_ppo_train_trains_the_env_and_exports_an_evaluable_policy(tmp_path):
-  from train.policy import load_policy
-  out = str(tmp_path / "brax")
-  assert brax_reference.main([*TRAIN_TINY, "--steps", "512", "--out", out]) == 0
+def test_brax_ppo_train_trains_the_env_and_is_recorded_like_any_run(tmp_path, capsys):
+  from train.core.policy import load_policy
+  out, db = str(tmp_path / "brax"), str(tmp_path / "db.sqlite")
+  assert run.main([*TRAIN_TINY, "--library", "brax", "--steps", "512", "--out", out, "--db", db]) == 0
   info = json.load(open(os.path.join(out, "policy", "policy.json")))
-  assert info["trainer"] == "brax" and info["algo"] == "ppo"
+  meta = json.load(open(os.path.join(out, "run.json")))
+  assert info["trainer"] == "brax" and info["algo"] == "ppo" and meta["library"] == "brax"
+  with sqlite3.connect(db) as c:
+    assert c.execute("SELECT status, run_id FROM experiments").fetchall() == [("done", meta["run_id"])]
   act = load_policy(os.path.join(out, "policy"))
   a = np.asarray(act(np.zeros((3, 6), np.float32)))
   assert a.shape == (3, 5) and np.all(np.abs(a) <= 1)
+  capsys.readouterr()
+  assert run.main(["--resume", out]) == 2  # Brax saves no checkpoints
+  assert "was trained by --library brax, which saves no checkpoints" in capsys.readouterr().err
 
 
 def test_brax_wraps_its_evaluation_env_with_the_evaluation_scenes():

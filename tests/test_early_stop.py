@@ -7,8 +7,8 @@ import pytest
 
 from mjx_tracks.envs.config import load_config
 from scenes.kinds.stairs import EARLY_STOP_RETURN
-from train.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, EarlyStop, parse_early_stop
-from train.loop import Checkpointer, Loop, Schedule
+from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, EarlyStop, parse_early_stop
+from train.core.loop import Checkpointer, Loop, Schedule
 
 
 def test_criteria_parse_with_their_defaults_and_name_bad_input():
@@ -31,7 +31,7 @@ def test_criteria_parse_with_their_defaults_and_name_bad_input():
 
 
 class FakeReporter:
-  """Rows as train.progress.Reporter makes them: source from the metrics' prefix."""
+  """Rows as train.core.progress.Reporter makes them: source from the metrics' prefix."""
 
   def __init__(self):
     self.rows = []
@@ -111,7 +111,7 @@ def test_time_of_updates_still_running_when_an_evaluation_starts_counts_as_train
     (["--task", "asc-inc-cog", "--preset", "laptop"], None),
     (["--task", "des-inc-ang", "--algo", "sac", "--preset", "paper"], None)])
 def test_the_preset_says_when_a_run_stops_unless_the_command_line_does(argv, expected, tmp_path):
-  from train.plan import plan_run
+  from train.core.plan import plan_run
   from train.run import parser
   plan = plan_run(parser().parse_args([*argv, "--out", str(tmp_path / "run")]))
   assert (str(plan.early_stop) if plan.early_stop else None) == expected

@@ -7,10 +7,10 @@ import dataclasses
 import numpy as np
 
 from helpers import TINY
-from train.build import build, init_state
-from train.plan import plan_run
+from train.core.build import build, init_state
+from train.core.plan import plan_run
 from train.run import parser
-from train.session import _evaluator
+from train.core.session import _evaluator
 
 
 def test_a_preset_with_evaluations_evaluates_a_fresh_policy_on_uniform_scenes(tmp_path):

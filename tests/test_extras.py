@@ -22,7 +22,7 @@ def _run(code: str, block: list[str], tmp_path) -> subprocess.CompletedProcess:
 
 
 def test_the_env_and_trainer_import_without_any_extra(tmp_path):
-  code = "import train.run, train.evaluate, train.build, train.loop, mjx_tracks.envs.gym_env; print('ok')"
+  code = "import train.run, train.evaluate, train.core.build, train.core.loop, mjx_tracks.envs.gym_env; print('ok')"
   r = _run(["-c", code], OPTIONAL, tmp_path)
   assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
 
@@ -48,3 +48,20 @@ def test_pyproject_extras_install_the_modules_listed():
   for extra, modules in EXTRAS.items():
     assert set(modules) <= names(extra), extra
   assert names("all") >= names("studies") | names("server") | names("notebooks")
+
+
+def test_the_training_core_imports_nothing_of_the_lab_but_evaluation_and_the_database():
+  """train/core/ may use the evaluation library (its probe) and the database (its records), not
+  studies, benchmarks or the server: found by reading every import of every core module."""
+  import ast  # noqa: PLC0415
+  core = pathlib.Path(__file__).resolve().parents[1] / "train" / "core"
+  allowed = ("train.core", "train.evaluation", "train.db", "train.extras")
+  found = {}
+  for path in core.rglob("*.py"):
+    for node in ast.walk(ast.parse(path.read_text())):
+      names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+          [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else []
+      for name in names:
+        if name.startswith("train") and not name.startswith(allowed):
+          found.setdefault(path.name, []).append(name)
+  assert len(list(core.rglob("*.py"))) >= 17 and not found, found

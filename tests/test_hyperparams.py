@@ -6,8 +6,8 @@ import os
 
 import pytest
 
-from train.plan import RunError, plan_run, write_run_json
-from train.presets import get_preset, with_hyperparams
+from train.core.plan import RunError, plan_run, write_run_json
+from train.core.presets import get_preset, with_hyperparams
 from train.run import parser as run_parser
 from train.study.spec import cells, study_from_dict
 

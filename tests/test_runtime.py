@@ -14,7 +14,7 @@ import pytest
 
 from helpers import TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
 from train import db as dbmod
-from train.checkpoints import RunCheckpoints
+from train.core.checkpoints import RunCheckpoints
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -39,7 +39,7 @@ def test_sigterm_stops_after_an_update_with_checkpoint_policy_and_exit_143(tmp_p
 
 _WAITER = """
 import sys, time
-from train.interrupts import StopRequest
+from train.core.interrupts import StopRequest
 with StopRequest() as stop:
   print("ready", flush=True)
   t = time.time()
@@ -93,7 +93,7 @@ def test_sigterm_twice_at_once_as_timeout_and_schedulers_send_it_still_saves():
 _PLAN_AND_START = """
 import sys
 from train import run
-from train.plan import plan_run, write_run_json
+from train.core.plan import plan_run, write_run_json
 plan = plan_run(run.parser().parse_args(["--task", "asc-inc-cog", "--preset", "cpu", "--seed", "3"]))
 run._start_records(plan, sys.argv[1])
 print(plan.run_id)

@@ -12,7 +12,7 @@ import pytest
 from distributed import Client
 
 from train.db import ExperimentDB
-from train.run_record import run_id_in
+from train.core.run_record import run_id_in
 from train.study.executor import STUDY_DB, StudyRunner, cell_folder_of, read_cells
 from train.study.merge import main as merge_main, merge
 from train.study.report import final_table, report_text

@@ -6,7 +6,7 @@ import pathlib
 import pytest
 
 from mjx_tracks.envs.config import ConfigError
-from train.plan import plan_run
+from train.core.plan import plan_run
 from train.run import parser as run_parser
 from train.study.__main__ import main as study_main
 from train.study.spec import cells, load_study, study_from_dict
@@ -35,6 +35,14 @@ def test_a_run_plans_like_its_command_line(tmp_path):
   assert plan.cfg.reward.cog_scale == 0.25 and str(plan.early_stop) == "success=0.9x3"
 
 
+def test_a_group_of_another_library_plans_its_runs_with_it(tmp_path):
+  spec = study_from_dict({**STUDY, "groups": [{**GROUP, "library": "brax", "hp": ["discounting=0.99"]}]})
+  c = [c for c in cells(spec) if not c.is_baseline][0]
+  plan = plan_run(run_parser().parse_args(c.run_args(str(tmp_path / "run"), str(tmp_path / "db.sqlite"))))
+  assert (plan.library, plan.early_stop, plan.probe_every, plan.preset.discounting) == ("brax", None, 0, 0.99)
+  assert load_study(str(STUDIES / "parity.yaml")).groups[1].library == "brax"
+
+
 @pytest.mark.parametrize("change, words", [
     ({"seedz": [0]}, "seedz: unknown key"),
     ({"tasks": ["asc-inc-cgo"]}, "unknown task 'asc-inc-cgo'"),
@@ -43,6 +51,8 @@ def test_a_run_plans_like_its_command_line(tmp_path):
     ({"groups": []}, "groups: must be a non-empty list"),
     ({"groups": [{**GROUP, "stepz": [1]}]}, r"groups\[0\].stepz: unknown key"),
     ({"groups": [{**GROUP, "preset": "huge"}]}, "unknown preset 'huge'"),
+    ({"groups": [{**GROUP, "library": "sb4"}]}, r"groups\[0\].library: one of \('mjx-tracks', 'brax'"),
+    ({"groups": [{**GROUP, "library": "brax", "early_stop": "return"}]}, r"groups\[0\].library: brax has no early stop"),
     ({"groups": [{**GROUP, "steps": [0]}]}, "budgets from 1 to"),
     ({"groups": [{**GROUP, "steps": [10**30]}]}, "budgets from 1 to"),
     ({"eval_trials": 10**9}, "eval_trials: from 1 to"),

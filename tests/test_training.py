@@ -14,7 +14,7 @@ import pytest
 from helpers import HELD_OUT, TINY_SETTINGS, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
 from train import db as dbmod
 from train import evaluate, run
-from train.checkpoints import RunCheckpoints
+from train.core.checkpoints import RunCheckpoints
 
 
 def test_the_main_command_ends_saying_what_it_made_and_what_to_run_next(ppo_run):
@@ -44,8 +44,8 @@ def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):
 
 def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
   from flax import serialization
-  from train.networks import NetworkSpec
-  from train.policy import load_policy
+  from train.core.networks import NetworkSpec
+  from train.core.policy import load_policy
   import mjx_tracks
   out, _ = ppo_run
   raw, meta = RunCheckpoints(out).restore()
@@ -122,7 +122,7 @@ def test_sigkill_then_resume_continues_bit_for_bit_past_a_corrupt_checkpoint(ppo
 
 def test_evaluation_writes_a_valid_report_equal_to_the_in_training_probe(ppo_run, tmp_path):
   """`train.evaluate --scene hardest` of the exported policy runs the very trials of the
-  in-training hardest probe (train.probe) of the final state: the same figures."""
+  in-training hardest probe (train.core.probe) of the final state: the same figures."""
   out, database = ppo_run
   report = str(tmp_path / "eval.json")
   assert evaluate.main([out, "--scene", "hardest", "--out", report, "--db", database]) == 0
@@ -204,7 +204,7 @@ def test_the_suite_evaluates_every_scene_at_every_milestone_with_its_own_policy(
   """--suite --milestones: hardest, uniform and the held-out staircase for the policy exported at
   1,024 steps and the final one; each report names its budget and policy step; the database gets
   every trial once per (scene, budget), also when evaluated again."""
-  from train.policy import load_policy_info
+  from train.core.policy import load_policy_info
   out, _ = ppo_run
   run_dir, database = str(tmp_path / "run"), str(tmp_path / "db.sqlite")
   shutil.copytree(out, run_dir)
@@ -259,8 +259,8 @@ def test_db_cli_lists_with_a_header_and_takes_run_directories(ppo_run, capsys):
 def test_the_cpu_default_is_the_preset_that_solves_the_flagship_task():
   """Without --preset, a PPO run on the CPU gets `laptop` (measured: results/first_run/), SAC the
   small `cpu`; each default exists."""
-  from train.plan import default_preset
-  from train.presets import get_preset
+  from train.core.plan import default_preset
+  from train.core.presets import get_preset
   assert jax.default_backend() == "cpu"
   assert default_preset("ppo") == "laptop" and default_preset("sac") == "cpu"
   p = get_preset("ppo", "laptop")

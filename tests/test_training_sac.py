@@ -7,13 +7,13 @@ import numpy as np
 from helpers import TINY, run_id
 from train import db as dbmod
 from train import run
-from train.checkpoints import RunCheckpoints
+from train.core.checkpoints import RunCheckpoints
 
 SAC_TINY = ["--task", "des-inc-ang", "--algo", "sac", "--preset", "cpu", *TINY]
 
 
 def test_sac_trains_exports_and_resumes_bit_for_bit_with_its_replay_buffer(tmp_path):
-  from train.policy import load_policy
+  from train.core.policy import load_policy
   whole, part = str(tmp_path / "whole"), str(tmp_path / "part")
   database = str(tmp_path / "db.sqlite")
   assert run.main([*SAC_TINY, "--steps", "256", "--out", whole, "--db", database]) == 0

@@ -304,7 +304,7 @@ def default_path(out_root: str = DEFAULT_ROOT) -> str:
 
 def resolve_run(arg: str) -> str:
   """A run id, or a run directory (its run.json names the run)."""
-  from train.run_record import is_run_dir, read_run_record  # noqa: PLC0415
+  from train.core.run_record import is_run_dir, read_run_record  # noqa: PLC0415
   return read_run_record(arg)["run_id"] if is_run_dir(arg) else arg
 
 

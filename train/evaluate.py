@@ -32,14 +32,14 @@ from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.evaluation import (EVAL_EPS, EVAL_SEED, EVAL_TRIALS, SCENES, fewer_trials_path, milestone_folder,
                               report_path, saved_milestones, scene_config, suite_scenes, trial_runner, trials_in)
-from train.run_record import read_run_record, run_id_in, write_run_record
+from train.core.run_record import read_run_record, run_id_in, write_run_record
 
 BASELINE_ROOT = os.path.join("runs", "baselines")  # where --baseline runs go unless RUN_DIR is given
 
 def _policy(run_dir: str, checkpoint: str | None, milestone: int | None = None):
   """(make_act, params, step) of the exported policy, of the one exported at a milestone budget, or
   of a checkpoint ('latest' or a step number)."""
-  from train.policy import act_from_params, load_checkpoint_params, load_policy_info, load_policy_params  # noqa: PLC0415
+  from train.core.policy import act_from_params, load_checkpoint_params, load_policy_info, load_policy_params  # noqa: PLC0415
   if checkpoint is None:
     policy_dir = os.path.join(run_dir, "policy" if milestone is None else milestone_folder(milestone))
     spec, params = load_policy_params(policy_dir)

@@ -13,7 +13,7 @@ import numpy as np
 from mjx_tracks.envs.config import ConfigError, TaskConfig
 from scenes.kinds import COMMON_SCENES, scene_kind
 from scenes.kinds.base import replace_scene
-from train.run_record import run_config  # noqa: F401  (the config a run recorded: part of this library)
+from train.core.run_record import run_config  # noqa: F401  (the config a run recorded: part of this library)
 
 SCENES = ("hardest", *COMMON_SCENES)  # the plain scene names (a task's kind adds prefixed ones)
 

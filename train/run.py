@@ -20,10 +20,10 @@ import os
 import sys
 
 from mjx_tracks.envs.config import ConfigError
-from train.checkpoints import CHECKPOINT_EVERY_S, KEEP
+from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
-from train.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
-from train.plan import RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
+from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
+from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
 
@@ -42,8 +42,11 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--db", help="experiment database (default: experiments.sqlite beside the run directory)")
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                  help="dotted config override, e.g. --set reward.cog_scale=0.5")
+  p.add_argument("--library", choices=tuple(LIBRARIES), metavar="LIBRARY",
+                 help="whose training loop: " + "; ".join(f"{k}: {v}" for k, v in LIBRARIES.items())
+                      + f" (default {DEFAULT_LIBRARY})")
   p.add_argument("--hp", action="append", default=[], metavar="KEY=VALUE",
-                 help="a hyper-parameter of the preset, e.g. --hp discounting=0.995 (train/presets.py names them)")
+                 help="a hyper-parameter of the preset, e.g. --hp discounting=0.995 (train/core/presets.py names them)")
   p.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its last readable checkpoint")
   p.add_argument("--early-stop", nargs="?", const="return", metavar="CRITERION",
                  help="stop at a criterion: 'return' (alone: the mean return of recent training episodes "
@@ -84,8 +87,10 @@ def _start_records(plan: RunPlan, db_path: str | None):
 def _train(plan: RunPlan, args) -> int:
   """Prepares the run (a resume restores its checkpoint before any record is touched), starts its
   records, trains, and closes them; returns the exit code."""
-  from train.interrupts import StopRequest  # noqa: PLC0415
-  from train.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
+  from train.core.interrupts import StopRequest  # noqa: PLC0415
+  from train.core.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
+  if plan.library != DEFAULT_LIBRARY:
+    return _train_elsewhere(plan, args)
   early = f", early stop at {plan.early_stop}" if plan.early_stop else ""
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
         f"{device_summary()}, {plan.total_steps:,} steps{early} -> {plan.out_dir}", flush=True)
@@ -112,6 +117,34 @@ def _train(plan: RunPlan, args) -> int:
   return 0
 
 
+def _train_elsewhere(plan: RunPlan, args) -> int:
+  """A run another library trains (train.core.brax_reference): recorded like ours, but with nothing
+  to resume from if it is stopped."""
+  import signal  # noqa: PLC0415
+
+  from train.core import brax_reference  # noqa: PLC0415
+
+  def stop(signum, _frame):  # SIGTERM as Ctrl-C: Brax's loop cannot be asked to stop between updates
+    raise KeyboardInterrupt(signum)
+
+  signal.signal(signal.SIGTERM, stop)
+  print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset) by {plan.library}, {plan.num_envs} envs, "
+        f"{plan.total_steps:,} steps -> {plan.out_dir}", flush=True)
+  db = _start_records(plan, args.db)
+  status, final = "crashed", {}
+  try:
+    final = brax_reference.train_run(plan, db)
+    status = "done"
+  except KeyboardInterrupt as e:
+    status = "interrupted"
+    print(f"interrupted: --library {plan.library} saves no checkpoints; nothing to resume", file=sys.stderr)
+    return 128 + (e.args[0] if e.args else signal.SIGINT)
+  finally:
+    db.finish(plan.run_id, status, final, final.get("step"), "" if status == "done" else status)
+  print(finished_lines(plan, final, getattr(db, "path", None)), flush=True)
+  return 0
+
+
 def finished_lines(plan: RunPlan, final: dict, db_path: str | None) -> str:
   """What a finished run made and the three commands a user runs next."""
   out = plan.out_dir
@@ -121,12 +154,13 @@ def finished_lines(plan: RunPlan, final: dict, db_path: str | None) -> str:
   why = {"done": "", "early_stop": f" (early stop: {plan.early_stop})"}.get(final["reason"], "")
   return "\n".join([
       f"done{why}: {final['step']:,} steps in {final.get('wall_s', 0):,.0f} s; last training episodes: {figures}",
-      f"made: {out}/ with policy/ (the exported policy), checkpoints/, run.json, tb/ (TensorBoard)"
+      f"made: {out}/ with policy/ (the exported policy), "
+      + ("checkpoints/, run.json, tb/ (TensorBoard)" if plan.library == DEFAULT_LIBRARY else "run.json")
       + (f"; records in {db_path}" if db_path else ""),
       "next:",
       f"  python -m train.evaluate {out} --scene hardest --trials 10   # the policy on the task's hardest scene",
       f"  python -m train.server --runs {os.path.dirname(out)}   # the dashboard (the [server] extra), http://127.0.0.1:8000",
-      f"  python -c \"from train.policy import load_policy; act = load_policy('{out}/policy')\"   # act(obs) in Python"])
+      f"  python -c \"from train.core.policy import load_policy; act = load_policy('{out}/policy')\"   # act(obs) in Python"])
 
 
 def _detail(status: str, stop, plan: RunPlan) -> str:

@@ -11,7 +11,7 @@ import os
 import sys
 
 from train import evaluate, evaluation
-from train.run_record import run_config
+from train.core.run_record import run_config
 from train.study.executor import STUDY_DB, read_cells, cell_folder_of
 
 

@@ -17,7 +17,7 @@ import subprocess
 import sys
 
 from mjx_tracks.envs.config import TaskConfig
-from train.run_record import run_config
+from train.core.run_record import run_config
 from train.study.executor import cell_folder_of, read_cells
 
 

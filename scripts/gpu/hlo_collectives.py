@@ -11,8 +11,8 @@ import collections
 import re
 import sys
 
-from train.build import build
-from train.plan import plan_run
+from train.core.build import build
+from train.core.plan import plan_run
 from train.run import parser
 
 COLLECTIVES = ("all-reduce", "all-gather", "all-to-all", "collective-permute", "reduce-scatter")
@@ -62,7 +62,7 @@ def main(argv: list[str]) -> None:
   plan = plan_run(parser().parse_args(argv))
   t = build(plan)
   import jax  # noqa: PLC0415
-  from train.build import shaped_state  # noqa: PLC0415
+  from train.core.build import shaped_state  # noqa: PLC0415
   jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,), donate_argnums=0)
   hlo = jitted.lower(shaped_state(t)).compile().as_text()
   print(f"{t.mesh.devices.size} x {jax.default_backend()}, {plan.task}, {plan.algo}, {plan.num_envs} envs")

@@ -3,7 +3,7 @@ which one crashes XLA's compiler; each variant in its own process, since a crash
 
   python scripts/gpu/probe_shardmap.py VARIANT [NUM_ENVS]
   gspmd     plain jit of the batched step (the partitioner splits the batch)
-  nogather  the step under shard_map (train.mesh.ShardedStep), curriculum per device
+  nogather  the step under shard_map (train.core.mesh.ShardedStep), curriculum per device
   gather    the same, the curriculum reduced across devices (what training runs)
   cho       shard_map of a batched Cholesky factorization alone
 
@@ -25,7 +25,7 @@ import mjx_tracks  # noqa: F401  (quiet MJX import)
 from mjx_tracks.envs.config import load_config
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
-from train.mesh import BATCH, ShardedStep
+from train.core.mesh import BATCH, ShardedStep
 
 
 def cholesky(mesh: Mesh, n: int) -> float:

@@ -40,9 +40,9 @@ def inference_step_s(core, state, reps: int) -> float:
   import jax  # noqa: PLC0415
 
   from mjx_tracks.envs.wrappers import batched_env  # noqa: PLC0415
-  from train.networks import NetworkSpec  # noqa: PLC0415
-  from train.policy import act_from_params  # noqa: PLC0415
-  from train.presets import get_preset  # noqa: PLC0415
+  from train.core.networks import NetworkSpec  # noqa: PLC0415
+  from train.core.policy import act_from_params  # noqa: PLC0415
+  from train.core.presets import get_preset  # noqa: PLC0415
   p = get_preset("ppo", "gpu")
   spec = NetworkSpec("ppo", core.observation_size, core.action_size, p.policy_hidden, p.value_hidden)
   act = act_from_params(spec, deterministic=False)(spec.init_policy_params())
@@ -54,8 +54,8 @@ def training_steps_per_s(task: str, n: int, updates: int) -> tuple[float, float]
   """(environment steps/s of whole PPO updates of the GPU preset at n robots, compile s)."""
   import jax  # noqa: PLC0415
 
-  from train.build import build, compile_update, init_state  # noqa: PLC0415
-  from train.plan import plan_run  # noqa: PLC0415
+  from train.core.build import build, compile_update, init_state  # noqa: PLC0415
+  from train.core.plan import plan_run  # noqa: PLC0415
   from train.run import parser  # noqa: PLC0415
   out = tempfile.mkdtemp(prefix="bench-scaling-")
   plan = plan_run(parser().parse_args(["--task", task, "--preset", "gpu", "--num-envs", str(n),

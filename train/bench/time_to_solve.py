@@ -14,7 +14,7 @@ import sys
 import tempfile
 import time
 
-from train.early_stop import EARLY_STOP_SUCCESS
+from train.core.early_stop import EARLY_STOP_SUCCESS
 
 
 def add_args(p) -> None:
@@ -28,7 +28,7 @@ def add_args(p) -> None:
 def _solve(args, seed: int, work: str) -> dict:
   """One seed: the run's process wall time, where and why it stopped, and its hardest success."""
   from train.db import ExperimentDB  # noqa: PLC0415
-  from train.run_record import read_run_record  # noqa: PLC0415
+  from train.core.run_record import read_run_record  # noqa: PLC0415
   out, db, cache = (os.path.join(work, f"s{seed}{x}") for x in ("", ".sqlite", "-cache"))
   train = [sys.executable, "-m", "train.run", "--task", args.task, "--steps", str(args.steps), "--early-stop",
            "success", "--seed", str(seed), "--out", out, "--db", db, *(["--preset", args.preset] if args.preset else [])]

@@ -13,6 +13,7 @@ import sys
 import threading
 import traceback
 
+from train.core.plan import DEFAULT_LIBRARY
 from train.db import ExperimentDB, utc_now
 from train.evaluation import EVAL_TRIALS
 from train.study.spec import Cell, study_from_dict
@@ -32,15 +33,17 @@ def study_of(spec: dict):
 
 
 def cell_of(spec: dict) -> Cell:
-  """The run a launch spec describes ({task, algo, preset, steps, seed, overrides, hp, early_stop}),
+  """The run a launch spec describes ({task, algo, preset, library, steps, seed, overrides, hp, early_stop}),
   checked like a study's; ConfigError names the faulty key."""
   group = {"name": "launch", "algo": spec.get("algo", "ppo"), "preset": spec.get("preset", "cpu"),
            "steps": [spec.get("steps", 2048)], "early_stop": spec.get("early_stop", ""),
-           "set": list(spec.get("overrides", [])), "hp": list(spec.get("hp", [])), "backend": spec.get("backend", "cpu")}
+           "set": list(spec.get("overrides", [])), "hp": list(spec.get("hp", [])),
+           "library": spec.get("library", DEFAULT_LIBRARY), "backend": spec.get("backend", "cpu")}
   study = study_from_dict({"name": "launch", "tasks": [spec.get("task")], "seeds": [spec.get("seed", 0)],
                            "groups": [group], "eval_trials": max(spec.get("eval_trials", EVAL_TRIALS), 1)})
   g = study.groups[0]
-  return Cell(g.name, study.tasks[0], g.steps[0], study.seeds[0], g.algo, g.preset, g.early_stop, g.set, g.backend, hp=g.hp)
+  return Cell(g.name, study.tasks[0], g.steps[0], study.seeds[0], g.algo, g.preset, g.early_stop, g.set, g.backend, hp=g.hp,
+              library=g.library)
 
 
 class Launcher:

@@ -30,6 +30,7 @@ class LaunchRequest(BaseModel):
   seed: Seed = 0
   overrides: Overrides = []  # dotted KEY=VALUE, as `train.run --set`
   hp: Overrides = []  # the preset's hyper-parameters KEY=VALUE, as `train.run --hp`
+  library: Name = "mjx-tracks"  # whose training loop, as `train.run --library`
   early_stop: CriterionText = ""
   eval_trials: Trials = EVAL_TRIALS  # trials per scene of the evaluation suite after training; 0: none
   backend: Name = "cpu"

@@ -16,7 +16,7 @@ import threading
 import time
 
 from train.db import ExperimentDB
-from train.run_record import read_run_record, run_id_in
+from train.core.run_record import read_run_record, run_id_in
 from train.study.spec import Cell, StudySpec, cells
 from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
 
@@ -36,7 +36,7 @@ def cell_folder(study_folder: str, cell: Cell) -> str:
 
 def _trained_to_the_end(run_folder: str) -> bool:
   """Whether the run's newest checkpoint is at its total steps (train.run refuses to resume it)."""
-  from train.checkpoints import trained_to  # noqa: PLC0415  (JAX: only where a run came back)
+  from train.core.checkpoints import trained_to  # noqa: PLC0415  (JAX: only where a run came back)
   try:
     total = read_run_record(run_folder, ()).get("total_steps")
   except (FileNotFoundError, ValueError):

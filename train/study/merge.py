@@ -13,7 +13,7 @@ import shutil
 import sys
 
 from train.db import ExperimentDB
-from train.run_record import run_id_in
+from train.core.run_record import run_id_in
 from train.study.executor import STATE, STUDY_DB, StudyState, cell_folder_of, read_cells
 from train.study.results import SPEC_FILE
 from train.study.spec import cells, load_study

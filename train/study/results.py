@@ -12,7 +12,7 @@ import numpy as np
 
 from mjx_tracks.metrics import EPISODE_NAMES, REPORT_NAMES
 from train.db import ExperimentDB
-from train.run_record import run_id_in
+from train.core.run_record import run_id_in
 from train.study.executor import STUDY_DB, cell_folder_of, read_cells
 from train.study.spec import BASELINE_GROUP, Cell, StudySpec, cells, load_study
 

@@ -11,12 +11,13 @@ from mjx_tracks.baselines import ALGO as BASELINE_ALGO, BASELINES, baselines_for
 from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks, config_dir, load_config, load_yaml,
                                     parse_mapping, require, require_plain_name, show)
 from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
-from train.early_stop import NO_EARLY_STOP, parse_early_stop
+from train.core.early_stop import NO_EARLY_STOP, parse_early_stop
 from train.evaluation import EVAL_TRIALS
-from train.presets import get_preset, with_hyperparams
+from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
+from train.core.presets import get_preset, with_hyperparams
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES)}
-GROUP_DEFAULTS = {"preset": "gpu", "early_stop": "", "set": [], "hp": [], "backend": "gpu", "budgets": "runs", "tasks": []}
+GROUP_DEFAULTS = {"preset": "gpu", "library": DEFAULT_LIBRARY, "early_stop": "", "set": [], "hp": [], "backend": "gpu", "budgets": "runs", "tasks": []}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
 
@@ -26,7 +27,8 @@ class GroupSpec:
   """Runs that differ only by task, seed and budget."""
   name: str
   algo: str  # ppo | sac
-  preset: str  # train/presets.py
+  preset: str  # train/core/presets.py
+  library: str  # whose training loop (train.run --library)
   steps: tuple[int, ...]  # step budgets: one run each
   early_stop: str  # an --early-stop criterion, or "" for none
   set: tuple[str, ...]  # config overrides KEY=VALUE, after the preset's
@@ -62,6 +64,7 @@ class Cell:
   backend: str  # gpu | cpu: which workers run it
   milestones: tuple[int, ...] = ()  # smaller budgets whose policies this run exports and evaluates
   hp: tuple[str, ...] = ()  # train.run --hp KEY=VALUE
+  library: str = DEFAULT_LIBRARY  # train.run --library
 
   @property
   def id(self) -> str:
@@ -85,6 +88,8 @@ class Cell:
       args += ["--set", item]
     for item in self.hp:
       args += ["--hp", item]
+    if self.library != DEFAULT_LIBRARY:
+      args += ["--library", self.library]
     if self.milestones:
       args += ["--milestones", ",".join(map(str, self.milestones))]
     return args + ["--early-stop", self.early_stop or NO_EARLY_STOP]  # the group's, not the preset's
@@ -109,6 +114,9 @@ def _group(raw, i: int) -> GroupSpec:
   require(bool(g.steps) and all(1 <= n <= MAX_STEPS for n in g.steps), f"{key}.steps",
           f"one or more budgets from 1 to {MAX_STEPS:,}")
   require(len(g.set) <= MAX_OVERRIDES, f"{key}.set", f"at most {MAX_OVERRIDES} overrides")
+  require(g.library in LIBRARIES, f"{key}.library", lambda: f"one of {tuple(LIBRARIES)}, got {show(g.library)}")
+  require(g.library == DEFAULT_LIBRARY or (g.budgets == "runs" and not g.early_stop), f"{key}.library",
+          f"{g.library} has no early stop or milestones: {LIBRARIES[g.library]}")
   require(len(g.hp) <= MAX_OVERRIDES, f"{key}.hp", f"at most {MAX_OVERRIDES} hyper-parameters")
   require(g.backend in BACKENDS, f"{key}.backend", lambda: f"one of {BACKENDS}, got {show(g.backend)}")
   require(g.budgets in BUDGETS, f"{key}.budgets", lambda: f"one of {BUDGETS}, got {show(g.budgets)}")
@@ -204,7 +212,8 @@ BASELINE_GROUP = "baseline-"  # + the baseline's name: the group of its cells
 def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order; then one evaluation of each
   baseline on each task it can drive (its trials vary by themselves; seed: the study's first)."""
-  trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones, g.hp)
+  trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones, g.hp,
+                  g.library)
              for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g)
              for seed in spec.seeds]
   return trained + [Cell(BASELINE_GROUP + name, task, 0, spec.seeds[0], BASELINE_ALGO, name, "", (), "gpu")

@@ -12,13 +12,22 @@ from typing import Any
 
 from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
 from mjx_tracks.limits import MAX_ENVS, MAX_SEED, MAX_STEPS
-from train.early_stop import NO_EARLY_STOP, EarlyStop, parse_early_stop
-from train.presets import CPU_DEFAULT, get_preset, with_hyperparams
-from train.run_record import read_run_record, run_id_in, write_run_record
+from train.core.early_stop import NO_EARLY_STOP, EarlyStop, parse_early_stop
+from train.core.presets import CPU_DEFAULT, get_preset, with_hyperparams
+from train.core.run_record import read_run_record, run_id_in, write_run_record
 
 
 class RunError(Exception):
   """A bad request: reported as one line, nothing written."""
+
+
+# whose training loop trains a run (train.run --library); every run is recorded alike
+LIBRARIES = {
+    "mjx-tracks": "this project's trainer (train/core): checkpoints, resume, probes, early stop, milestones",
+    "brax": "Brax's own ppo.train / sac.train on the same env and preset: no checkpoints, resume, probes, "
+            "early stop or milestones (the parity reference)",
+}
+DEFAULT_LIBRARY = "mjx-tracks"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,6 +49,7 @@ class RunPlan:
   start_step: int = 0  # the checkpoint a resumed run continues from
   milestones: tuple[int, ...] = ()  # step budgets at which the policy is exported to RUN/milestones/<budget>
   hp: tuple[str, ...] = ()  # --hp KEY=VALUE: the preset's fields the run changed (already in preset)
+  library: str = DEFAULT_LIBRARY  # LIBRARIES
 
 
 def default_preset(algo: str) -> str:
@@ -52,8 +62,8 @@ def default_preset(algo: str) -> str:
 
 
 # options a resumed run takes from its run.json; giving one with --resume is refused
-RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "hp", "out", "early_stop", "probe_every",
-                "milestones")
+RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "hp", "library", "out", "early_stop",
+                "probe_every", "milestones")
 
 
 def _plan_resume(args: argparse.Namespace) -> RunPlan:
@@ -66,10 +76,13 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
     meta = read_run_record(args.resume)
   except (FileNotFoundError, ValueError) as e:
     raise RunError(f"--resume {args.resume}: {e}") from None
+  if meta.get("library", DEFAULT_LIBRARY) != DEFAULT_LIBRARY:
+    raise RunError(f"run {meta['run_id']} was trained by --library {meta['library']}, which saves no checkpoints: "
+                   "nothing to resume; train it again")
   total = meta["total_steps"] if args.steps is None else args.steps
   if not 1 <= total <= MAX_STEPS:
     raise RunError(f"--steps must be from 1 to {MAX_STEPS:,}")
-  from train.checkpoints import checkpoint_dir, saved_steps, trained_to  # noqa: PLC0415  (orbax: only when resuming)
+  from train.core.checkpoints import checkpoint_dir, saved_steps, trained_to  # noqa: PLC0415  (orbax: only when resuming)
   steps = saved_steps(args.resume)
   if not steps:
     raise RunError(f"--resume {args.resume}: no checkpoint in {checkpoint_dir(args.resume)} to resume from")
@@ -160,10 +173,29 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     early = _early_stop(args.early_stop, preset, cfg)
   except ValueError as e:
     raise RunError(str(e))
-  probe_every = _probe_every(args.probe_every, early, preset, cfg)
-  milestones = parse_milestones(getattr(args, "milestones", None), steps)
+  library = getattr(args, "library", None) or DEFAULT_LIBRARY
+  if library != DEFAULT_LIBRARY:
+    early, probe_every, milestones = _library_limits(library, args, early)
+  else:
+    probe_every = _probe_every(args.probe_every, early, preset, cfg)
+    milestones = parse_milestones(getattr(args, "milestones", None), steps)
   return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
-                 cfg, steps, num_envs, False, early, probe_every, milestones=milestones, hp=tuple(args.hp))
+                 cfg, steps, num_envs, False, early, probe_every, milestones=milestones, hp=tuple(args.hp),
+                 library=library)
+
+
+def _library_limits(library: str, args: argparse.Namespace, early: EarlyStop | None):
+  """(early stop, probe interval, milestones) of a run another library trains: none of them; asking
+  for one is refused (the preset's own early stop is dropped)."""
+  if library not in LIBRARIES:
+    raise RunError(f"--library {library!r}: one of {', '.join(LIBRARIES)}")
+  given = [f"--{n.replace('_', '-')}" for n in ("probe_every", "milestones", "coordinator")
+           if getattr(args, n, None) not in (None, 0, "")]
+  if args.early_stop not in (None, NO_EARLY_STOP):
+    given.append("--early-stop")
+  if given:
+    raise RunError(f"--library {library} trains with {LIBRARIES[library]}; drop {', '.join(given)}")
+  return None, 0, ()
 
 
 def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:
@@ -208,7 +240,7 @@ def write_run_json(plan: RunPlan) -> None:
   """run.json (atomically); a resumed run keeps its creation time."""
   now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
   meta = {"run_id": plan.run_id, "task": plan.task, "algo": plan.algo, "preset": plan.preset_name,
-          "seed": plan.seed, "overrides": list(plan.overrides), "hp": list(plan.hp), "config": plan.cfg.to_dict(),
+          "seed": plan.seed, "overrides": list(plan.overrides), "hp": list(plan.hp), "library": plan.library, "config": plan.cfg.to_dict(),
           "total_steps": plan.total_steps, "num_envs": plan.num_envs,
           "early_stop": str(plan.early_stop) if plan.early_stop else None, "probe_every": plan.probe_every,
           "milestones": list(plan.milestones),

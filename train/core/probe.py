@@ -9,8 +9,8 @@ import numpy as np
 
 from mjx_tracks.metrics import REPORT_COLUMN as COLUMNS  # per-trial figure -> report column
 from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_config, trial_runner
-from train.mesh import to_host
-from train.policy import act_from_params
+from train.core.mesh import to_host
+from train.core.policy import act_from_params
 
 PREFIX = "hardest/"  # the probe's metrics: hardest/<report column>
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from mjx_tracks.metrics import REPORT_COLUMN, STEP_NAMES, episode_figures
 from train.db import STAT_SOURCES
-from train.probe import PREFIX as PROBE
+from train.core.probe import PREFIX as PROBE
 
 
 def summarize(metrics: dict[str, Any]) -> dict[str, float]:
@@ -19,7 +19,7 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
   and pitch rate are ratios of means, and the rates (success, tip-overs) the means of the
   episodes' 0/1 sums (an episode reaches the goal or tips over at most once: either ends it)."""
   m = {k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1}
-  if any(k.startswith(PROBE) for k in m):  # already per-trial means (train.probe)
+  if any(k.startswith(PROBE) for k in m):  # already per-trial means (train.core.probe)
     return {k[len(PROBE):]: v for k, v in m.items() if k.startswith(PROBE)}
   if "episode/sum_reward" in m:
     prefix, ret, length = "episode/", m["episode/sum_reward"], m.get("episode/length")

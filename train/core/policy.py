@@ -1,6 +1,6 @@
 """Load an exported policy into a jitted act(observation) -> action, without the trainer.
 
-    from train.policy import load_policy
+    from train.core.policy import load_policy
     act = load_policy("runs/my-run/policy")
     env = mjx_tracks.load("asc-inc-cog")
     state = env.reset(jax.random.PRNGKey(0))
@@ -16,7 +16,7 @@ import jax
 import orbax.checkpoint as ocp
 from flax import serialization
 
-from train.networks import NetworkSpec
+from train.core.networks import NetworkSpec
 
 
 def load_policy_info(path: str) -> dict:
@@ -61,7 +61,7 @@ def make_act(spec: NetworkSpec, params, deterministic: bool = True):
 def load_checkpoint_params(run_dir: str, step: int | None = None):
   """(network spec, (normalizer, policy) parameters, step) of a training checkpoint (default: the
   latest), e.g. of a killed run."""
-  from train.checkpoints import RunCheckpoints, checkpoint_dir, policy_params, saved_steps  # noqa: PLC0415
+  from train.core.checkpoints import RunCheckpoints, checkpoint_dir, policy_params, saved_steps  # noqa: PLC0415
   steps = saved_steps(run_dir)
   if not steps:
     raise FileNotFoundError(f"no checkpoint in {checkpoint_dir(run_dir)} to evaluate")

@@ -8,7 +8,7 @@ RUN/checkpoints/<step>/ holds three items:
 - `meta` (JSON): step, algorithm, network spec, the leaves' tree paths and shapes, curriculum.
 Orbax writes each step into a temporary directory and renames it when complete, so a run killed
 mid-save leaves the previous checkpoint readable; a damaged one is skipped for the one before it.
-RUN/policy/ is the export: (normalizer, policy) plus policy.json, loadable by `train.policy`.
+RUN/policy/ is the export: (normalizer, policy) plus policy.json, loadable by `train.core.policy`.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import numpy as np
 import orbax.checkpoint as ocp
 from flax import serialization
 
-from train.networks import NetworkSpec
+from train.core.networks import NetworkSpec
 
 KEEP = 3  # checkpoints kept
 CHECKPOINT_EVERY_S = 60.0  # s of wall time between timed checkpoints (any backend)

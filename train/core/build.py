@@ -17,17 +17,17 @@ from jax.sharding import NamedSharding, PartitionSpec
 from mjx_tracks import compile_cache
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
-from train.algos.ppo import PPO, ppo_layout
-from train.algos.sac import SAC
+from train.core.algos.ppo import PPO, ppo_layout
+from train.core.algos.sac import SAC
 from train.evaluation import scene_config
-from train.mesh import BATCH, ShardedStep, make_mesh, replicated, state_shardings, use_gspmd_partitioner
-from train.networks import NetworkSpec
+from train.core.mesh import BATCH, ShardedStep, make_mesh, replicated, state_shardings, use_gspmd_partitioner
+from train.core.networks import NetworkSpec
 
 
 @dataclasses.dataclass(frozen=True)
 class Training:
   """A run's built parts."""
-  plan: Any  # train.plan.RunPlan
+  plan: Any  # train.core.plan.RunPlan
   mesh: Any
   core: TrackedRobotEnv
   learner: PPO | SAC

@@ -16,8 +16,8 @@ from brax.training.agents.ppo import losses as ppo_losses
 from brax.training.agents.ppo import networks as ppo_networks
 from flax import struct
 
-from train.algos.episodes import curriculum_figures, finished_sums
-from train.presets import PPOPreset
+from train.core.algos.episodes import curriculum_figures, finished_sums
+from train.core.presets import PPOPreset
 
 STATE_EXTRAS = ("truncation", "episode_metrics", "episode_done")
 

@@ -1,4 +1,4 @@
-"""Brax 0.14.2 on JAX >= 0.10 (only for train.brax_reference): a replacement for the removed `jax.device_put_replicated`.
+"""Brax 0.14.2 on JAX >= 0.10 (only for train.core.brax_reference): a replacement for the removed `jax.device_put_replicated`.
 
 Brax's PPO and SAC trainers replicate their training state with `jax.device_put_replicated`
 (google/brax issue 671). This puts a stacked copy of each leaf on a one-axis device mesh with a

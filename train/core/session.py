@@ -10,14 +10,14 @@ from typing import Any
 
 import jax
 
-from train.build import Training, build, compile_update, init_state, make_evaluator
-from train.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
+from train.core.build import Training, build, compile_update, init_state, make_evaluator
+from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
 from train.evaluation import milestone_folder
-from train.loop import Checkpointer, Loop, LoopResult, Schedule
-from train.mesh import from_host, to_host
-from train.plan import RunError, RunPlan
-from train.probe import HardestProbe
-from train.progress import Reporter
+from train.core.loop import Checkpointer, Loop, LoopResult, Schedule
+from train.core.mesh import from_host, to_host
+from train.core.plan import RunError, RunPlan
+from train.core.probe import HardestProbe
+from train.core.progress import Reporter
 
 
 @dataclasses.dataclass(frozen=True)

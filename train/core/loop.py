@@ -11,10 +11,10 @@ import jax
 import numpy as np
 
 from mjx_tracks.envs.wrappers import global_stats_to_json
-from train.algos.episodes import EpisodeAccumulator
-from train.checkpoints import RunCheckpoints
-from train.early_stop import EarlyStop
-from train.mesh import local_value, to_host
+from train.core.algos.episodes import EpisodeAccumulator
+from train.core.checkpoints import RunCheckpoints
+from train.core.early_stop import EarlyStop
+from train.core.mesh import local_value, to_host
 
 
 @dataclasses.dataclass

@@ -14,9 +14,9 @@ from brax.training.agents.sac import networks as sac_networks
 from brax.training.types import Params, Transition
 from flax import struct
 
-from train.algos.episodes import curriculum_figures, finished_sums
-from train.algos.ppo import STATE_EXTRAS
-from train.presets import SACPreset
+from train.core.algos.episodes import curriculum_figures, finished_sums
+from train.core.algos.ppo import STATE_EXTRAS
+from train.core.presets import SACPreset
 
 ALPHA_LEARNING_RATE = 3e-4  # brax's SAC: a fixed Adam rate for log(alpha), which starts at 0
 

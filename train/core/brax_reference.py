@@ -1,19 +1,16 @@
-"""`python -m train.brax_reference`: the same task and preset trained by Brax's own `ppo.train` /
-`sac.train` (the reference for parity with train.run's loop); writes run.json and policy/, so that
-`python -m train.evaluate` evaluates it like any run. No checkpoints, resume or database.
+"""`python -m train.run --library brax`: the same task and preset trained by Brax's own `ppo.train` /
+`sac.train` (the reference for parity with this project's loop); recorded like any run (run.json,
+the database's rows, policy/), so that `train.evaluate` and studies use it alike. No checkpoints,
+resume, probes or early stop: Brax's train() has none.
 
-    python -m train.brax_reference --task asc-inc-cog --preset gpu --steps 2000000 --seed 0 --out runs/brax-s0
+    python -m train.run --library brax --task asc-inc-cog --preset gpu --steps 2000000 --seed 0
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
 import time
 
-from mjx_tracks.envs.config import ConfigError
-from train.plan import RunError, RunPlan, plan_run, write_run_json
+from train.core.plan import RunPlan
 
 
 def brax_kwargs(plan: RunPlan, spec) -> dict:
@@ -36,8 +33,8 @@ def brax_train(plan: RunPlan, progress=lambda step, metrics: None):
   """(network spec, (normalizer, policy)) trained by Brax's train() for the plan."""
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   from mjx_tracks.envs.wrappers import wrap_for_training  # noqa: PLC0415
-  from train import brax_compat  # noqa: PLC0415
-  from train.build import network_spec  # noqa: PLC0415
+  from train.core import brax_compat  # noqa: PLC0415
+  from train.core.build import network_spec  # noqa: PLC0415
   from train.evaluation import scene_config  # noqa: PLC0415
   brax_compat.install()
   core = TrackedRobotEnv(plan.cfg)
@@ -52,34 +49,15 @@ def brax_train(plan: RunPlan, progress=lambda step, metrics: None):
   return spec, (params[0], params[1])
 
 
-def main(argv: list[str] | None = None) -> int:
-  p = argparse.ArgumentParser(prog="python -m train.brax_reference", description=__doc__.splitlines()[0])
-  for name in ("--task", "--algo", "--preset", "--out"):
-    p.add_argument(name)
-  for name in ("--num-envs", "--steps", "--seed"):
-    p.add_argument(name, type=int)
-  p.add_argument("--set", action="append", default=[])
-  p.add_argument("--hp", action="append", default=[])
-  args = p.parse_args(argv)
-  args.resume, args.early_stop, args.probe_every = None, None, 0
-  from mjx_tracks import compile_cache  # noqa: PLC0415
-  compile_cache.enable()
-  try:
-    plan = plan_run(args)
-  except (RunError, ConfigError) as e:
-    print(f"error: {e}", file=sys.stderr)
-    return 2
-  write_run_json(plan)
+def train_run(plan: RunPlan, db) -> dict:
+  """Trains the plan with Brax's train(), printing its evaluations, and exports the policy; returns
+  the run's final figures (step, wall_s) for its records."""
   t0 = time.time()
   show = lambda step, m: print(f"{step:>11,} steps, {time.time() - t0:,.0f} s: " + ", ".join(
       f"{k} {float(v):.3f}" for k, v in m.items() if k.endswith(("episode_reward", "sum_reward"))), flush=True)
   spec, (normalizer, policy) = brax_train(plan, show)
-  from train.checkpoints import export_policy  # noqa: PLC0415
+  from train.core.checkpoints import export_policy  # noqa: PLC0415
   info = {"task": plan.task, "algo": plan.algo, "step": plan.total_steps, "run_id": plan.run_id,
           "config": plan.cfg.to_dict(), "trainer": "brax", "train_wall_s": time.time() - t0}
-  print(json.dumps({"policy": export_policy(plan.out_dir, normalizer, policy, spec, info), **info}, default=str)[:400])
-  return 0
-
-
-if __name__ == "__main__":
-  sys.exit(main())
+  export_policy(plan.out_dir, normalizer, policy, spec, info)
+  return {"reason": "done", "step": plan.total_steps, "wall_s": time.time() - t0}

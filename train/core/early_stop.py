@@ -1,6 +1,6 @@
 """Early-stop criteria of a run: `return[=X]`, the paper's (mean return of the training episodes
 finished since the last report), or `success[=X]` (success of the hardest-staircase probe,
-train.probe, the trials of the final `train.evaluate --scene hardest`), each optionally `xN`:
+train.core.probe, the trials of the final `train.evaluate --scene hardest`), each optionally `xN`:
 met by N reports in a row."""
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ class EarlyStop:
     return CRITERIA[self.metric][0] == HARDEST
 
   def met(self, row: dict) -> bool:
-    """Whether a report row (train.progress.Reporter) reaches the threshold."""
+    """Whether a report row (train.core.progress.Reporter) reaches the threshold."""
     source, column = CRITERIA[self.metric]
     return row.get("source") == source and row.get(column) is not None and row[column] >= self.threshold
 
