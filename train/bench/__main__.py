@@ -1,5 +1,5 @@
 """`python -m train.bench NAME [options] [--out FILE]`: run one benchmark (NAME: env, physics,
-scaling, ablate, time-to-solve, baselines; `python -m train.bench NAME --help` for its options) and write its
+scaling, ablate, time-to-solve, baselines, gate (exits 1 if a physics oracle fails); `python -m train.bench NAME --help` for its options) and write its
 rows, with device, command and date, to FILE (default results/bench/NAME-<device kind>.json)."""
 
 from __future__ import annotations
@@ -7,11 +7,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from train.bench import ablate, baselines, env, physics, scaling, time_to_solve
+from train.bench import ablate, baselines, env, gate, physics, scaling, time_to_solve
 from train.bench.result import default_path, write_result
 
 BENCHES = {"env": env, "physics": physics, "scaling": scaling, "ablate": ablate, "time-to-solve": time_to_solve,
-           "baselines": baselines}
+           "baselines": baselines, "gate": gate}
 
 
 def parser() -> argparse.ArgumentParser:
@@ -31,11 +31,15 @@ def main(argv: list[str] | None = None) -> int:
   args = parser().parse_args(argv)
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
-  rows, fields = BENCHES[args.bench].run(args)
+  try:
+    rows, fields = BENCHES[args.bench].run(args)
+  except ValueError as e:
+    print(f"error: {e}", file=sys.stderr)
+    return 2
   out = args.out or default_path(args.bench)
   write_result(out, rows, bench=args.bench, **fields)
   print(f"wrote {out}", file=sys.stderr)
-  return 0
+  return 1 if fields.get("pass") is False else 0  # a failed gate
 
 
 if __name__ == "__main__":

@@ -1,0 +1,204 @@
+"""gate: the physics oracles under any physics settings (`--set physics.KEY=VALUE`), each figure
+against its tolerance, PASS or FAIL (the command exits 1 on a failure): flat-ground speed and yaw
+rate against the commanded ones, creep with the belts stopped on a 20-degree incline, the scripted
+stair controller of both robots up and down the paper's hardest staircase, robot 1's single-step
+limit (a step below the measured 0.275 m climbed, one far above it not), and a passive fall
+stepped by MJX under the settings against MuJoCo's C engine under the default ones. A faster
+physics setting is adopted only if it passes.
+
+    python -m train.bench gate --set physics.solver_iterations=2 --set physics.timestep=0.0125
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+CONTROL_PERIOD = 0.1  # s, of the scripted drives (as `python -m mjx_tracks.tools.drive`)
+HARDEST = (0.35, 0.22, 7)  # tread m, riser m, steps: the paper tasks' hardest staircase (asc-inc-cog's)
+STEP_BELOW, STEP_ABOVE = 0.25, 0.35  # m, single steps below and far above robot 1's measured limit (0.275 m,
+#                                      results/terrain/single-step-limit.json)
+DRIVE_SECONDS = 20.0  # s, each scripted drive
+FALL = dict(height=0.10, roll=0.25, seconds=1.5)  # m above resting, rad, s: the passive fall of the C-engine check
+
+
+@dataclasses.dataclass(frozen=True)
+class Check:
+  name: str
+  value: float
+  limit: str  # the tolerance, as text: "<= 0.05", "reached", ...
+  ok: bool
+  unit: str = ""
+
+  def row(self) -> dict:
+    return {"check": self.name, "value": float(f"{float(self.value):.4g}"), "unit": self.unit, "tolerance": self.limit,
+            "pass": bool(self.ok)}
+
+
+def add_args(p) -> None:
+  p.add_argument("--set", action="append", default=[], metavar="physics.KEY=VALUE",
+                 help="physics settings to check (configs/defaults.yaml's physics section)")
+  p.add_argument("--robots", default="1,2", help="robots whose stair drives are checked")
+
+
+def physics_of(overrides: list[str]):
+  """The physics section under the overrides; only physics.* keys are taken (ValueError otherwise)."""
+  from mjx_tracks.envs.config import load_config  # noqa: PLC0415
+  wrong = [o for o in overrides if not o.startswith("physics.")]
+  if wrong:
+    raise ValueError(f"the gate checks physics settings only (physics.KEY=VALUE); got {', '.join(wrong)}")
+  return load_config("asc-inc-cog", tuple(overrides)).physics
+
+
+def flat_checks(physics) -> list[Check]:
+  """Robot 1 on flat ground: steady speed at 0.5 m/s commanded, lateral drift, and yaw rate at
+  0.5 rad/s commanded (the steering formula's), as tests/test_track_model.py derives them."""
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.robots import get_robot  # noqa: PLC0415
+  from mjx_tracks.sim.control import command_belt_speeds  # noqa: PLC0415
+  from mjx_tracks.sim.pose import chassis_rpy  # noqa: PLC0415
+  from mjx_tracks.sim.simulator import staircase_simulator  # noqa: PLC0415
+  sim = staircase_simulator(get_robot(1), physics)
+  r = sim.robot
+  qpos = _drive_flat(sim, command_belt_speeds(0.5, 0.0, r.track_separation, r.steering_efficiency, r.max_speed), 12)
+  speed = (qpos[-1, 0] - qpos[3, 0]) / (8 * 0.25)  # m/s over the last 2 s
+  belts = command_belt_speeds(0.0, 0.5, r.track_separation, r.steering_efficiency, r.max_speed)
+  turn = _drive_flat(sim, belts, 8)
+  yaw = np.unwrap(np.asarray(chassis_rpy(jnp.asarray(turn)))[:, 2])
+  rate = (yaw[-1] - yaw[3]) / (4 * 0.25)
+  expected = r.steering_efficiency * float(belts[1] - belts[0]) / r.track_separation
+  return [Check("flat speed error", abs(speed / 0.5 - 1), "<= 0.05", abs(speed / 0.5 - 1) <= 0.05),
+          Check("flat lateral drift", abs(qpos[-1, 1]), "<= 0.02", abs(qpos[-1, 1]) <= 0.02, "m"),
+          Check("yaw rate error", abs(rate / expected - 1), "<= 0.10", abs(rate / expected - 1) <= 0.10)]
+
+
+def _drive_flat(sim, belts, periods: int) -> np.ndarray:
+  """qpos after each of `periods` 0.25 s periods of constant belt speeds on the stair world's floor."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from scenes import staircase as sc  # noqa: PLC0415
+  m = sim.with_boxes(*sc.step_boxes(sc.Staircase(jnp.float32(0.3), jnp.float32(0.17), jnp.int32(0))))
+  substeps = max(1, round(0.25 / sim.physics.timestep))
+  nj = sim.layout.n_joints
+  adv = jax.jit(lambda d: sim.advance(m, d, belts, jnp.zeros(nj), substeps))
+  d, out = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(nj)), []
+  for _ in range(periods):
+    d = adv(d)
+    out.append(np.asarray(d.qpos))
+  return np.stack(out)
+
+
+def incline_check(physics) -> list[Check]:
+  """Robot 1 with its belts stopped on a 20-degree incline, nose up: creep over 5 s after 1 s of
+  settling."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.robots import get_robot  # noqa: PLC0415
+  from mjx_tracks.sim.simulator import Simulator  # noqa: PLC0415
+  from scenes.world import world_geom_attrs  # noqa: PLC0415
+  angle = math.radians(20)
+  n = (-math.sin(angle), 0.0, math.cos(angle))
+  world = f'<geom name="slope" type="plane" size="0 0 1" zaxis="{n[0]} {n[1]} {n[2]}" {world_geom_attrs()}/>'
+  sim = Simulator.create(get_robot(1), world, physics)
+  nj = sim.layout.n_joints
+  d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(nj))
+  quat = jnp.array([math.cos(-angle / 2), 0.0, math.sin(-angle / 2), 0.0])
+  d = d.replace(qpos=d.qpos.at[:3].set((sim.robot.spawn_height + 0.002) * jnp.asarray(n)).at[3:7].set(quat))
+  substeps = max(1, round(0.25 / physics.timestep))
+  adv = jax.jit(lambda d: sim.advance(sim.model, d, jnp.zeros(6), jnp.zeros(nj), substeps))
+  for _ in range(4):
+    d = adv(d)
+  start = np.asarray(d.qpos[:3])
+  for _ in range(20):
+    d = adv(d)
+  creep = float(np.linalg.norm(np.asarray(d.qpos[:3]) - start))
+  return [Check("creep on 20-degree incline in 5 s", creep, "<= 0.01", creep <= 0.01, "m")]
+
+
+def stair_checks(physics, robot: str) -> list[Check]:
+  """The scripted controller up and down the hardest staircase (goal reached, no tip-over); for
+  robot 1 also the single steps below and far above its limit."""
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.envs.config import default_config  # noqa: PLC0415
+  from mjx_tracks.robots import get_robot  # noqa: PLC0415
+  from mjx_tracks.sim.simulator import staircase_simulator  # noqa: PLC0415
+  from mjx_tracks.tools.drive import DriveSetup, scripted_rollouts, summarize  # noqa: PLC0415
+  from scenes import staircase as sc  # noqa: PLC0415
+  sim, tol = staircase_simulator(get_robot(robot), physics), default_config().episode.goal_tolerance
+  out = []
+  for direction in ("up", "down"):
+    cases = [("hardest", *HARDEST)] + ([("step", HARDEST[0], STEP_BELOW, 1), ("step", HARDEST[0], STEP_ABOVE, 1)]
+                                       if robot == "1" and direction == "up" else [])
+    stairs = sc.Staircase(*(jnp.asarray([c[i] for c in cases], t) for i, t in
+                            ((1, jnp.float32), (2, jnp.float32), (3, jnp.int32))))
+    setup = DriveSetup(sim, stairs, direction, CONTROL_PERIOD, tol)
+    qpos = scripted_rollouts(setup, round(DRIVE_SECONDS / CONTROL_PERIOD))
+    for (what, tread, riser, steps), q in zip(cases, qpos):
+      s = summarize(dataclasses.replace(setup, stairs=sc.Staircase(tread, riser, steps)), q)
+      passed = s["goal_reached"] and not s["tipped_over"]
+      if what == "hardest":
+        out.append(Check(f"robot {robot} scripted {direction} hardest staircase", passed, "reached", passed))
+      else:
+        want = riser < 0.3
+        out.append(Check(f"robot {robot} scripted single step {riser} m", passed,
+                         "climbed" if want else "not climbed", passed == want))
+  return out
+
+
+def c_engine_check(physics) -> list[Check]:
+  """Robot 1 falling from FALL['height'] with roll FALL['roll'] onto the floor, joints held, belts
+  still: MJX (no track model) under the settings against MuJoCo's C engine under the defaults;
+  the largest height and roll / pitch differences over the fall."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+  import mujoco  # noqa: PLC0415
+
+  from mjx_tracks.envs.config import default_config  # noqa: PLC0415
+  from mjx_tracks.robots import get_robot  # noqa: PLC0415
+  from mjx_tracks.sim.pose import chassis_rpy  # noqa: PLC0415
+  from mjx_tracks.sim.simulator import staircase_simulator  # noqa: PLC0415
+  sim, ref = (staircase_simulator(get_robot(1), p) for p in (physics, default_config().physics))
+  d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(sim.layout.n_joints))
+  quat = [math.cos(FALL["roll"] / 2), math.sin(FALL["roll"] / 2), 0.0, 0.0]
+  qpos0 = np.asarray(d.qpos).copy()
+  qpos0[2] += FALL["height"]
+  qpos0[3:7] = quat
+  chunks = round(FALL["seconds"] / 0.05)  # compared every 0.05 s
+  step = jax.jit(lambda d: jax.lax.fori_loop(0, round(0.05 / physics.timestep), lambda _, x: sim.plain_step(sim.model, x), d))
+  d, ours = d.replace(qpos=jnp.asarray(qpos0)), []
+  for _ in range(chunks):
+    d = step(d)
+    ours.append(np.asarray(d.qpos))
+  mj = ref.mj_model
+  c = mujoco.MjData(mj)
+  c.qpos[:] = qpos0
+  theirs = []
+  for _ in range(len(ours)):
+    mujoco.mj_step(mj, c, nstep=round(0.05 / mj.opt.timestep))
+    theirs.append(c.qpos.copy())
+  ours, theirs = np.stack(ours), np.stack(theirs)
+  dz = float(np.abs(ours[:, 2] - theirs[:, 2]).max())
+  rpy = [np.asarray(chassis_rpy(jnp.asarray(q))) for q in (ours, theirs)]
+  dang = float(np.abs(rpy[0][:, :2] - rpy[1][:, :2]).max())
+  return [Check("fall vs C engine: height", dz, "<= 0.005", dz <= 0.005, "m"),
+          Check("fall vs C engine: roll / pitch", dang, "<= 0.02", dang <= 0.02, "rad")]
+
+
+def run(args) -> tuple[list[dict], dict]:
+  physics = physics_of(args.set)
+  checks = flat_checks(physics) + incline_check(physics) + c_engine_check(physics)
+  for robot in args.robots.split(","):
+    checks += stair_checks(physics, robot.strip())
+  rows = [c.row() for c in checks]
+  for r in rows:
+    print(f"{'PASS' if r['pass'] else 'FAIL'}  {r['check']}: {r['value']:g} {r['unit']} (tolerance {r['tolerance']})",
+          flush=True)
+  verdict = all(r["pass"] for r in rows)
+  print(f"gate: {'PASS' if verdict else 'FAIL'} for {dataclasses.asdict(physics)}", flush=True)
+  return rows, {"physics": dataclasses.asdict(physics), "overrides": list(args.set), "pass": verdict}
