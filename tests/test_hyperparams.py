@@ -28,6 +28,8 @@ def test_values_take_the_type_of_the_presets_field():
     ("batch_size=0", "--hp batch_size: a whole number >= 1"),
     ("batch_size=2.5", "--hp batch_size: a whole number >= 1"),
     ("run_evals=2", "--hp run_evals: true or false"),
+    ("learning_rate=.inf", "--hp learning_rate: a number > 0"),
+    ("reward_scaling=0", "--hp reward_scaling: a number > 0"),
     ("policy_hidden=[0]", "--hp policy_hidden: a list of widths"),
     ("num_envs=8", "--hp num_envs: set it with --num-envs"),
     ("config_overrides=[]", "--hp config_overrides: set it with --set"),

@@ -1,5 +1,6 @@
 """The physics gate (`python -m train.bench gate`): its oracles pass under the default physics and
-fail under settings that break the physics (one solver and one line-search iteration)."""
+fail under settings that break the physics (one solver and one line-search iteration). Its flat-
+ground oracles are tests/test_track_model.py's."""
 
 import pytest
 
@@ -14,14 +15,10 @@ def test_the_default_physics_passes_and_one_solver_iteration_fails_against_the_c
   assert not any(c.ok for c in bad) and bad[0].value > 0.1  # m: the fall goes wrong
 
 
-def test_flat_ground_oracles_pass_under_the_default_physics():
-  checks = gate.flat_checks(gate.physics_of([]))
-  assert [c.name for c in checks] == ["flat speed error", "flat lateral drift", "yaw rate error"]
-  assert all(c.ok for c in checks), checks
-
-
 def test_the_gate_takes_physics_settings_only(capsys):
   assert bench_main(["gate", "--set", "reward.cog_scale=1"]) == 2
   assert "physics settings only" in capsys.readouterr().err
-  with pytest.raises(ValueError, match="solver_iterations"):
+  with pytest.raises(gate.BadSettings, match="solver_iterations"):
     gate.physics_of(["physics.solver_iterations=0"])
+  with pytest.raises(gate.BadSettings, match="must divide"):
+    gate.physics_of(["physics.timestep=0.019230769230769232"])  # 0.25 s / 13: a control period, not 0.05 s

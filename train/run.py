@@ -5,12 +5,16 @@
     python -m train.run --task asc-inc-cog --set reward.cog_scale=0.5 --steps 5000000 --out runs/a
     python -m train.run --resume runs/a                         # continue an interrupted or killed run
     python -m train.run --resume runs/a --steps 8000000         # train a finished run further
+    python -m train.run --task des-inc-ang --hp discounting=0.995  # a preset's hyper-parameter
+    python -m train.run --task asc-inc-cog --library brax       # Brax's own ppo.train (no checkpoints)
 
 Writes into the run directory: run.json, checkpoints/ (orbax, the whole training state, every
 --checkpoint-every seconds and at the end), policy/ (the exported policy), tb/ (TensorBoard);
 statistics, events and the run's status go to the experiment database. Ctrl-C or SIGTERM stops
 after the current update with a checkpoint and the policy (exit 130 / 143); a second Ctrl-C quits
-at once. Several GPUs are used as one device mesh; see the README for several processes.
+at once. Several GPUs are used as one device mesh; see the README for several processes. With
+--library brax, Brax's train() runs instead: run.json, the database's run row and events, and
+policy/ are written; no checkpoints or statistics rows, and a stop ends the run with nothing to resume.
 """
 
 from __future__ import annotations
@@ -87,10 +91,10 @@ def _start_records(plan: RunPlan, db_path: str | None):
 def _train(plan: RunPlan, args) -> int:
   """Prepares the run (a resume restores its checkpoint before any record is touched), starts its
   records, trains, and closes them; returns the exit code."""
-  from train.core.interrupts import StopRequest  # noqa: PLC0415
-  from train.core.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
   if plan.library != DEFAULT_LIBRARY:
     return _train_elsewhere(plan, args)
+  from train.core.interrupts import StopRequest  # noqa: PLC0415
+  from train.core.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
   early = f", early stop at {plan.early_stop}" if plan.early_stop else ""
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
         f"{device_summary()}, {plan.total_steps:,} steps{early} -> {plan.out_dir}", flush=True)
@@ -127,19 +131,20 @@ def _train_elsewhere(plan: RunPlan, args) -> int:
   def stop(signum, _frame):  # SIGTERM as Ctrl-C: Brax's loop cannot be asked to stop between updates
     raise KeyboardInterrupt(signum)
 
-  signal.signal(signal.SIGTERM, stop)
+  previous = signal.signal(signal.SIGTERM, stop)
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset) by {plan.library}, {plan.num_envs} envs, "
         f"{plan.total_steps:,} steps -> {plan.out_dir}", flush=True)
   db = _start_records(plan, args.db)
   status, final = "crashed", {}
   try:
-    final = brax_reference.train_run(plan, db)
+    final = brax_reference.train_run(plan)
     status = "done"
   except KeyboardInterrupt as e:
     status = "interrupted"
     print(f"interrupted: --library {plan.library} saves no checkpoints; nothing to resume", file=sys.stderr)
     return 128 + (e.args[0] if e.args else signal.SIGINT)
   finally:
+    signal.signal(signal.SIGTERM, previous)
     db.finish(plan.run_id, status, final, final.get("step"), "" if status == "done" else status)
   print(finished_lines(plan, final, getattr(db, "path", None)), flush=True)
   return 0

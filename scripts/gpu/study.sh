@@ -30,7 +30,8 @@ start() {
   if [ -n "${FROM:-}" ]; then rm -rf "${root:?}/$study" && cp -r "$FROM" "$root/$study"; fi
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1) x $(nvidia-smi -L | wc -l)"
   { echo "command: ${cmd[*]}"; echo "device: $device, $(nproc) CPU cores, date: $(date -u +%FT%TZ)"; } | tee -a "$log"
-  PYTHONPATH="${PYTHONPATH//$PWD/$root/src}" setsid bash -c 'cd "'"$root/src"'" && "$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
+  local pp=${PYTHONPATH:-}
+  PYTHONPATH="${pp//"$PWD"/$root/src}" setsid bash -c 'cd "'"$root/src"'" && "$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
   sleep 2
   pgrep -o -s $! -x python3 >"$pidfile"  # setsid made the shell a session leader: its sid is its pid
 }

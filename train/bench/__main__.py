@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
   compile_cache.enable()
   try:
     rows, fields = BENCHES[args.bench].run(args)
-  except ValueError as e:
+  except gate.BadSettings as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
   out = args.out or default_path(args.bench)

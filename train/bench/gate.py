@@ -43,18 +43,32 @@ def add_args(p) -> None:
   p.add_argument("--robots", default="1,2", help="robots whose stair drives are checked")
 
 
+class BadSettings(ValueError):
+  """Settings the gate cannot check: reported in one line (exit 2)."""
+
+
+SAMPLE_PERIODS = (0.05, 0.25)  # s, the gate's sampling periods: the timestep must divide them
+
+
 def physics_of(overrides: list[str]):
-  """The physics section under the overrides; only physics.* keys are taken (ValueError otherwise)."""
-  from mjx_tracks.envs.config import load_config  # noqa: PLC0415
+  """The physics section under the overrides; only physics.* keys, and timesteps that divide the
+  sampling periods (BadSettings otherwise)."""
+  from mjx_tracks.envs.config import ConfigError, load_config  # noqa: PLC0415
   wrong = [o for o in overrides if not o.startswith("physics.")]
   if wrong:
-    raise ValueError(f"the gate checks physics settings only (physics.KEY=VALUE); got {', '.join(wrong)}")
-  return load_config("asc-inc-cog", tuple(overrides)).physics
+    raise BadSettings(f"the gate checks physics settings only (physics.KEY=VALUE); got {', '.join(wrong)}")
+  try:
+    physics = load_config("asc-inc-cog", tuple(overrides)).physics
+  except ConfigError as e:
+    raise BadSettings(str(e)) from None
+  if any(abs(p / physics.timestep - round(p / physics.timestep)) > 1e-6 for p in SAMPLE_PERIODS):
+    raise BadSettings(f"physics.timestep {physics.timestep} s must divide {SAMPLE_PERIODS} s (e.g. 0.005, 0.01, 0.0125)")
+  return physics
 
 
 def flat_checks(physics) -> list[Check]:
   """Robot 1 on flat ground: steady speed at 0.5 m/s commanded, lateral drift, and yaw rate at
-  0.5 rad/s commanded (the steering formula's), as tests/test_track_model.py derives them."""
+  0.5 rad/s commanded (the steering formula's) while turning in place."""
   import jax.numpy as jnp  # noqa: PLC0415
 
   from mjx_tracks.robots import get_robot  # noqa: PLC0415
@@ -72,7 +86,8 @@ def flat_checks(physics) -> list[Check]:
   expected = r.steering_efficiency * float(belts[1] - belts[0]) / r.track_separation
   return [Check("flat speed error", abs(speed / 0.5 - 1), "<= 0.05", abs(speed / 0.5 - 1) <= 0.05),
           Check("flat lateral drift", abs(qpos[-1, 1]), "<= 0.02", abs(qpos[-1, 1]) <= 0.02, "m"),
-          Check("yaw rate error", abs(rate / expected - 1), "<= 0.10", abs(rate / expected - 1) <= 0.10)]
+          Check("yaw rate error", abs(rate / expected - 1), "<= 0.10", abs(rate / expected - 1) <= 0.10),
+          Check("turn-in-place drift", np.linalg.norm(turn[-1, :2]), "<= 0.05", np.linalg.norm(turn[-1, :2]) <= 0.05, "m")]
 
 
 def _drive_flat(sim, belts, periods: int) -> np.ndarray:
@@ -84,10 +99,10 @@ def _drive_flat(sim, belts, periods: int) -> np.ndarray:
   m = sim.with_boxes(*sc.step_boxes(sc.Staircase(jnp.float32(0.3), jnp.float32(0.17), jnp.int32(0))))
   substeps = max(1, round(0.25 / sim.physics.timestep))
   nj = sim.layout.n_joints
-  adv = jax.jit(lambda d: sim.advance(m, d, belts, jnp.zeros(nj), substeps))
+  adv = jax.jit(lambda d, belts: sim.advance(m, d, belts, jnp.zeros(nj), substeps))  # one program for every command
   d, out = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(nj)), []
   for _ in range(periods):
-    d = adv(d)
+    d = adv(d, belts)
     out.append(np.asarray(d.qpos))
   return np.stack(out)
 
@@ -145,7 +160,7 @@ def stair_checks(physics, robot: str) -> list[Check]:
       if what == "hardest":
         out.append(Check(f"robot {robot} scripted {direction} hardest staircase", passed, "reached", passed))
       else:
-        want = riser < 0.3
+        want = riser == STEP_BELOW
         out.append(Check(f"robot {robot} scripted single step {riser} m", passed,
                          "climbed" if want else "not climbed", passed == want))
   return out

@@ -49,7 +49,7 @@ def brax_train(plan: RunPlan, progress=lambda step, metrics: None):
   return spec, (params[0], params[1])
 
 
-def train_run(plan: RunPlan, db) -> dict:
+def train_run(plan: RunPlan) -> dict:
   """Trains the plan with Brax's train(), printing its evaluations, and exports the policy; returns
   the run's final figures (step, wall_s) for its records."""
   t0 = time.time()

@@ -91,7 +91,11 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
     raise RunError(f"run {meta['run_id']} is finished ({done:,} of {meta['total_steps']:,} steps); to train "
                    f"it further: --resume {args.resume} --steps N with N > {done:,}")
   hp = tuple(meta.get("hp") or ())  # runs from before --hp recorded none
-  preset = dataclasses.replace(with_hyperparams(get_preset(meta["algo"], meta["preset"]), hp), num_envs=meta["num_envs"])
+  try:
+    preset = with_hyperparams(get_preset(meta["algo"], meta["preset"]), hp)
+  except ValueError as e:
+    raise RunError(f"--resume {args.resume}: its run.json's {e}") from None
+  preset = dataclasses.replace(preset, num_envs=meta["num_envs"])
   _check_devices(meta["num_envs"])
   cfg = from_dict(meta["config"])
   return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],

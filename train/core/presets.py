@@ -6,6 +6,7 @@ the paper's SAC set-up (2 x 64 MLP, initial entropy coefficient 0.5, tau 0.05, g
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Sequence
 
 import yaml
@@ -110,6 +111,7 @@ HP_ELSEWHERE = {"num_envs": "--num-envs", "num_timesteps": "--steps", "config_ov
 
 HP_ZERO_OK = {"probe_steps"}  # whole-number fields where 0 means none; the others count from 1
 HP_AT_MOST_ONE = {"discounting", "gae_lambda", "tau", "clipping_epsilon"}
+HP_POSITIVE = {"learning_rate", "reward_scaling", "max_grad_norm", "tau"}  # 0 would train nothing
 
 
 def with_hyperparams(preset, items: Sequence[str]):
@@ -144,14 +146,17 @@ def _hp_value(key: str, text: str, default):
     ok = isinstance(value, int) and not isinstance(value, bool) and value >= (0 if key in HP_ZERO_OK else 1)
   elif isinstance(default, float):
     high = 1.0 if key in HP_AT_MOST_ONE else float("inf")
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and 0 <= value <= high
+    low_ok = (lambda v: v > 0) if key in HP_POSITIVE else (lambda v: v >= 0)
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) \
+        and low_ok(value) and value <= high
     value = float(value) if ok else value
   else:  # layer widths
     ok = isinstance(value, list) and bool(value) and all(isinstance(v, int) and v > 0 for v in value)
     value = tuple(value) if ok else value
   if not ok:
     want = {bool: "true or false", int: f"a whole number >= {0 if key in HP_ZERO_OK else 1}",
-            float: "a number in [0, 1]" if key in HP_AT_MOST_ONE else "a number >= 0"}.get(
+            float: ("a number in (0, 1]" if key in HP_POSITIVE else "a number in [0, 1]") if key in HP_AT_MOST_ONE
+            else "a number > 0" if key in HP_POSITIVE else "a number >= 0"}.get(
                 type(default), "a list of widths, e.g. [64, 64]")
     raise ValueError(f"--hp {key}: {want}, got {text!r}")
   return value

@@ -10,6 +10,7 @@ from fastapi import APIRouter, HTTPException, Request
 from pydantic import BaseModel
 
 from mjx_tracks.envs.config import ConfigError
+from train.core.plan import DEFAULT_LIBRARY
 from train.db import ExperimentDB
 from train.evaluation import EVAL_TRIALS
 from train.server.deps import db_of, run_or_404
@@ -30,7 +31,7 @@ class LaunchRequest(BaseModel):
   seed: Seed = 0
   overrides: Overrides = []  # dotted KEY=VALUE, as `train.run --set`
   hp: Overrides = []  # the preset's hyper-parameters KEY=VALUE, as `train.run --hp`
-  library: Name = "mjx-tracks"  # whose training loop, as `train.run --library`
+  library: Name = DEFAULT_LIBRARY  # whose training loop, as `train.run --library`
   early_stop: CriterionText = ""
   eval_trials: Trials = EVAL_TRIALS  # trials per scene of the evaluation suite after training; 0: none
   backend: Name = "cpu"
