@@ -76,6 +76,10 @@ def test_bad_launches_are_refused_naming_the_field(tmp_path, cluster):
     assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "overrides", "reward.cog_scal"]
     assert client.post("/api/launches", json={"task": "nope"}).status_code == 422
     assert client.post("/api/launches", json={"task": "asc-inc-cog", "preset": "huge"}).status_code == 422
+    bad_hp = client.post("/api/launches", json={"task": "asc-inc-cog", "hp": ["discounting=2"]})
+    assert bad_hp.status_code == 422 and "--hp discounting: a number in [0, 1]" in bad_hp.json()["detail"][0]["msg"]
+    brax = client.post("/api/launches", json={"task": "asc-inc-cog", "library": "brax", "early_stop": "success"})
+    assert brax.status_code == 422 and "brax has no early stop" in brax.json()["detail"][0]["msg"]
     assert client.delete("/api/launches/99").status_code == 404
     assert client.post("/api/runs/zzz/stop").status_code == 404
     assert client.get("/api/launches").json() == []
