@@ -65,3 +65,16 @@ def test_baselines_sit_in_the_final_table_but_not_in_the_comparisons_of_trained_
   final = final_table(_results())
   assert any(r.startswith("| baseline-full | asc-inc-cog | - | 1 | 1.00 [1.00, 1.00] |") for r in final)
   assert not any("baseline" in r for r in improvement_table(_results()))
+
+
+def test_the_final_figure_draws_each_baseline_beside_the_trained_policy():
+  from train.study.figures import final_figure
+  fig = final_figure(_results(), "ppo")
+  hardest = fig.axes[0]
+  assert hardest.get_title() == "hardest"
+  lines = {c.get_label(): c for c in hardest.collections if c.get_label().startswith("baseline ")}
+  assert set(lines) >= {"baseline zero", "baseline full"}  # labelled once, on the first task
+  heights = sorted(float(seg[0][1]) for c in hardest.collections if c.get_label() != "_nolegend_"
+                   for seg in c.get_segments() if len(seg) == 2 and seg[0][1] == seg[1][1])
+  # zero 0.25 and full 1.0 on asc-inc-cog; zero 0.75 and full 0.5 on des-inc-ang (made-up trials above)
+  assert {0.25, 0.5, 0.75, 1.0} <= set(heights)

@@ -1,5 +1,6 @@
 """The study report's figures (matplotlib, PNG): learning curves per group with bootstrap bands,
-against environment steps and wall time, and final success per budget with IQM intervals."""
+against environment steps and wall time, and final success per budget with IQM intervals and each
+baseline's figure beside them."""
 
 from __future__ import annotations
 
@@ -44,6 +45,23 @@ def curves_figure(results: StudyResults, group: str, x: str):
 
 
 COLUMNS = 4  # panels per row of the final figure
+BASELINE_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)))  # line styles of the baselines, in the spec's order
+BASELINE_COLORS = ("0.35", "tab:red", "tab:purple", "tab:green")  # with one budget (each task has its place)
+
+
+def _baseline_lines(ax, results: StudyResults, scene: str, metric: str, one_budget: bool) -> None:
+  """Each baseline's figure on the scene as a horizontal line: with one budget across its task's
+  point in the baseline's colour, else in the task's colour; labelled `baseline NAME` once a panel."""
+  for i, task in enumerate(results.spec.tasks):
+    for name, value in results.baseline_figure(task, scene, metric).items():
+      k = results.spec.baselines.index(name)
+      style = BASELINE_STYLES[k % len(BASELINE_STYLES)]
+      label = f"baseline {name}" if i == 0 else None
+      if one_budget:
+        ax.hlines(value, i - 0.4, i + 0.4, colors=BASELINE_COLORS[k % len(BASELINE_COLORS)], linestyles=style,
+                  label=label, alpha=0.8)
+      else:
+        ax.axhline(value, color=f"C{i % 10}", linestyle=style, label=label, alpha=0.6)
 
 
 def _final_panel(ax, results: StudyResults, group: str, scene: str, metric: str, budgets: list[int]) -> None:
@@ -56,6 +74,7 @@ def _final_panel(ax, results: StudyResults, group: str, scene: str, metric: str,
       mid = np.array([est[str(b)][0] for b in xs])
       err = np.array([[m - est[str(b)][1], est[str(b)][2] - m] for b, m in zip(xs, mid)]).T
       ax.errorbar([i] if one else xs, mid, yerr=err, marker="o", capsize=3, label=task, color=f"C{i % 10}")
+  _baseline_lines(ax, results, scene, metric, one)
   if one:
     ax.set_xticks(range(len(results.spec.tasks)), results.spec.tasks, rotation=60, ha="right", fontsize=7)
     ax.set_xlim(-0.5, len(results.spec.tasks) - 0.5)
@@ -82,8 +101,8 @@ def final_figure(results: StudyResults, group: str, metric: str = "success"):
   for ax in axes.flat[len(scenes):]:
     ax.set_visible(False)
   axes[0][0].set_ylabel(f"{metric} (IQM, 95 % CI)")
-  if len(budgets) > 1:
-    axes[0][0].legend(fontsize=8)
+  if len(budgets) > 1 or results.spec.baselines:
+    axes[0][0].legend(fontsize=7)
   budget = "" if len(budgets) > 1 else f" at {budgets[0]:,} steps"
   fig.suptitle(f"{group}: {metric} per evaluation scene{budget} (evaluations of each run)")
   return fig
