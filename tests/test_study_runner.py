@@ -18,7 +18,7 @@ from fake_study_run import fake_success
 from train.db import ExperimentDB
 
 from train.study.cluster import local_cluster
-from train.study.executor import STUDY_DB, StudyRunner, cell_folder
+from train.study.executor import STUDY_DB, StudyRunner, cell_folder, next_attempt
 from train.study.spec import cells, study_from_dict
 from train.study.report import write_report
 from train.study.status import summary
@@ -225,3 +225,21 @@ def test_status_says_submitted_not_running_for_runs_handed_to_the_cluster(tmp_pa
   lines = summary(str(folder), runs=True)
   assert "4 not finished (4 submitted: running or waiting for a slot)" in lines[0]
   assert all(" submitted " in line and " running " not in line for line in lines[2:])
+
+
+def test_a_brax_run_is_evaluated_again_only_once_trained_and_else_trained_from_the_start(tmp_path):
+  """Brax writes no checkpoints: a brax cell whose evaluation failed keeps its policy and is only
+  evaluated again; one whose training failed is trained again from the start (nothing to resume)."""
+  spec = study_from_dict({"name": "b", "tasks": ["asc-inc-cog"], "seeds": [0], "baselines": [],
+                          "groups": [{"name": "brax", "algo": "ppo", "preset": "cpu", "steps": [64], "library": "brax"},
+                                     {"name": "ours", "algo": "ppo", "preset": "cpu", "steps": [64]}]})
+  brax, ours = cells(spec)
+  run = tmp_path / "run"
+  assert next_attempt(brax, str(run), []) == (False, True)  # the first attempt trains
+  (run / "policy").mkdir(parents=True)
+  (run / "policy" / "policy.json").write_text("{}")
+  assert next_attempt(brax, str(run), [{"phase": "evaluate"}]) == (True, False)  # evaluate only
+  assert next_attempt(brax, str(run), [{"phase": "train"}]) == (False, True)  # policy of an unfinished train
+  assert next_attempt(ours, str(run), [{"phase": "evaluate"}]) == (False, True)  # ours needs checkpoints
+  (run / "checkpoints" / "64").mkdir(parents=True)
+  assert next_attempt(ours, str(run), [{"phase": "evaluate"}]) == (True, False)

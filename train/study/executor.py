@@ -16,6 +16,7 @@ import threading
 import time
 
 from train.db import ExperimentDB
+from train.core.plan import DEFAULT_LIBRARY
 from train.core.run_record import read_run_record, run_id_in
 from train.study.spec import Cell, StudySpec, cells
 from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
@@ -42,6 +43,21 @@ def _trained_to_the_end(run_folder: str) -> bool:
   except (FileNotFoundError, ValueError):
     total = None
   return trained_to(run_folder, total)
+
+
+def next_attempt(cell: Cell, run_folder: str, ended: list[dict]) -> tuple[bool, bool]:
+  """(whether the attempt starts from the run folder, whether it trains) after the ended attempts.
+  This project's runs resume from their checkpoints and only evaluate once trained to the end; a
+  run another library trains (no checkpoints) is evaluated again only if its training finished
+  (its policy written and an evaluation begun), else trained again from the start."""
+  evaluated = bool(ended) and ended[-1]["phase"] == "evaluate"  # training finished (or stopped early)
+  if cell.library != DEFAULT_LIBRARY:
+    policy = os.path.join(run_folder, "policy")
+    has_run = evaluated and os.path.isdir(policy) and bool(os.listdir(policy))
+    return has_run, not (cell.is_baseline or has_run)
+  ckpts = os.path.join(run_folder, "checkpoints")
+  has_run = os.path.isdir(ckpts) and bool(os.listdir(ckpts))
+  return has_run, not (cell.is_baseline or has_run and (evaluated or _trained_to_the_end(run_folder)))
 
 
 def read_cells(folder: str) -> dict:
@@ -131,11 +147,8 @@ class StudyRunner:
     cell, record = self.cells[cid], self.state.cells[cid]
     local = cell_folder(self.folder, cell)
     ended = [a for a in record["attempts"] if a.get("phase")]  # not those the study's own stop cut off
-    ckpts = os.path.join(local, "checkpoints")
-    has_run = os.path.isdir(ckpts) and bool(os.listdir(ckpts))
+    has_run, train = next_attempt(cell, local, ended)  # train False: evaluate only
     resume = pack(local) if has_run else None
-    evaluated = bool(ended) and ended[-1]["phase"] == "evaluate"  # training finished (or stopped early)
-    train = not (cell.is_baseline or has_run and (evaluated or _trained_to_the_end(local)))  # else evaluate only
     record["status"] = "running"
     record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
     eval_args = cell.eval_args(self.spec.eval_trials)
