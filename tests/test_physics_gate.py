@@ -5,6 +5,7 @@ ground oracles are tests/test_track_model.py's."""
 import pytest
 
 from train.bench import gate
+from train.bench.result import BenchInputError
 from train.bench.__main__ import main as bench_main
 
 
@@ -18,7 +19,7 @@ def test_the_default_physics_passes_and_one_solver_iteration_fails_against_the_c
 def test_the_gate_takes_physics_settings_only(capsys):
   assert bench_main(["gate", "--set", "reward.cog_scale=1"]) == 2
   assert "physics settings only" in capsys.readouterr().err
-  with pytest.raises(gate.BadSettings, match="solver_iterations"):
+  with pytest.raises(BenchInputError, match="solver_iterations"):
     gate.physics_of(["physics.solver_iterations=0"])
-  with pytest.raises(gate.BadSettings, match="must divide"):
+  with pytest.raises(BenchInputError, match="must divide"):
     gate.physics_of(["physics.timestep=0.019230769230769232"])  # 0.25 s / 13: a control period, not 0.05 s

@@ -8,7 +8,7 @@ import argparse
 import sys
 
 from train.bench import ablate, baselines, env, gate, physics, scaling, time_to_solve
-from train.bench.result import default_path, write_result
+from train.bench.result import BenchInputError, default_path, write_result
 
 BENCHES = {"env": env, "physics": physics, "scaling": scaling, "ablate": ablate, "time-to-solve": time_to_solve,
            "baselines": baselines, "gate": gate}
@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
   compile_cache.enable()
   try:
     rows, fields = BENCHES[args.bench].run(args)
-  except gate.BadSettings as e:
+  except BenchInputError as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
   out = args.out or default_path(args.bench)

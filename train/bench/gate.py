@@ -16,8 +16,11 @@ import math
 
 import numpy as np
 
+from train.bench.result import BenchInputError
+
 CONTROL_PERIOD = 0.1  # s, of the scripted drives (as `python -m mjx_tracks.tools.drive`)
-HARDEST = (0.35, 0.22, 7)  # tread m, riser m, steps: the paper tasks' hardest staircase (asc-inc-cog's)
+PAPER_TASK = "asc-inc-cog"  # whose hardest staircase the drives climb and descend (7 x 0.35 x 0.22 m)
+FLAT_PERIOD, FALL_PERIOD = 0.25, 0.05  # s, between the flat / incline and the fall's samples
 STEP_BELOW, STEP_ABOVE = 0.25, 0.35  # m, single steps below and far above robot 1's measured limit (0.275 m,
 #                                      results/terrain/single-step-limit.json)
 DRIVE_SECONDS = 20.0  # s, each scripted drive
@@ -32,6 +35,11 @@ class Check:
   ok: bool
   unit: str = ""
 
+  @staticmethod
+  def at_most(name: str, value: float, bound: float, unit: str = "") -> "Check":
+    """A figure that passes at or below its bound."""
+    return Check(name, value, f"<= {bound:g}", value <= bound, unit)
+
   def row(self) -> dict:
     return {"check": self.name, "value": float(f"{float(self.value):.4g}"), "unit": self.unit, "tolerance": self.limit,
             "pass": bool(self.ok)}
@@ -43,27 +51,35 @@ def add_args(p) -> None:
   p.add_argument("--robots", default="1,2", help="robots whose stair drives are checked")
 
 
-class BadSettings(ValueError):
-  """Settings the gate cannot check: reported in one line (exit 2)."""
-
-
-SAMPLE_PERIODS = (0.05, 0.25)  # s, the gate's sampling periods: the timestep must divide them
-
-
 def physics_of(overrides: list[str]):
   """The physics section under the overrides; only physics.* keys, and timesteps that divide the
-  sampling periods (BadSettings otherwise)."""
+  sampling periods (BenchInputError otherwise)."""
   from mjx_tracks.envs.config import ConfigError, load_config  # noqa: PLC0415
   wrong = [o for o in overrides if not o.startswith("physics.")]
   if wrong:
-    raise BadSettings(f"the gate checks physics settings only (physics.KEY=VALUE); got {', '.join(wrong)}")
+    raise BenchInputError(f"the gate checks physics settings only (physics.KEY=VALUE); got {', '.join(wrong)}")
   try:
-    physics = load_config("asc-inc-cog", tuple(overrides)).physics
+    physics = load_config(PAPER_TASK, tuple(overrides)).physics
   except ConfigError as e:
-    raise BadSettings(str(e)) from None
-  if any(abs(p / physics.timestep - round(p / physics.timestep)) > 1e-6 for p in SAMPLE_PERIODS):
-    raise BadSettings(f"physics.timestep {physics.timestep} s must divide {SAMPLE_PERIODS} s (e.g. 0.005, 0.01, 0.0125)")
+    raise BenchInputError(str(e)) from None
+  periods = (FALL_PERIOD, FLAT_PERIOD)
+  if any(abs(p / physics.timestep - round(p / physics.timestep)) > 1e-6 for p in periods):
+    raise BenchInputError(f"physics.timestep {physics.timestep} s must divide {periods} s (e.g. 0.005, 0.01, 0.0125)")
   return physics
+
+
+def _substeps(physics, period: float) -> int:
+  """Physics steps in `period` seconds (physics_of checked that the timestep divides it)."""
+  return round(period / physics.timestep)
+
+
+def _paper_hardest() -> tuple[float, float, int]:
+  """(tread m, riser m, steps) of PAPER_TASK's hardest staircase: each range at its hard end."""
+  from mjx_tracks.envs.config import load_config  # noqa: PLC0415
+  from scenes.terrain_kinds import STAIRS  # noqa: PLC0415
+  scene = load_config(PAPER_TASK).scene
+  tread, riser, steps = STAIRS.hardest(lambda n: getattr(scene, n))
+  return float(tread), float(riser), int(steps)
 
 
 def flat_checks(physics) -> list[Check]:
@@ -78,27 +94,26 @@ def flat_checks(physics) -> list[Check]:
   sim = staircase_simulator(get_robot(1), physics)
   r = sim.robot
   qpos = _drive_flat(sim, command_belt_speeds(0.5, 0.0, r.track_separation, r.steering_efficiency, r.max_speed), 12)
-  speed = (qpos[-1, 0] - qpos[3, 0]) / (8 * 0.25)  # m/s over the last 2 s
+  speed = (qpos[-1, 0] - qpos[3, 0]) / (8 * FLAT_PERIOD)  # m/s over the last 2 s
   belts = command_belt_speeds(0.0, 0.5, r.track_separation, r.steering_efficiency, r.max_speed)
   turn = _drive_flat(sim, belts, 8)
   yaw = np.unwrap(np.asarray(chassis_rpy(jnp.asarray(turn)))[:, 2])
-  rate = (yaw[-1] - yaw[3]) / (4 * 0.25)
+  rate = (yaw[-1] - yaw[3]) / (4 * FLAT_PERIOD)
   expected = r.steering_efficiency * float(belts[1] - belts[0]) / r.track_separation
-  return [Check("flat speed error", abs(speed / 0.5 - 1), "<= 0.05", abs(speed / 0.5 - 1) <= 0.05),
-          Check("flat lateral drift", abs(qpos[-1, 1]), "<= 0.02", abs(qpos[-1, 1]) <= 0.02, "m"),
-          Check("yaw rate error", abs(rate / expected - 1), "<= 0.10", abs(rate / expected - 1) <= 0.10),
-          Check("turn-in-place drift", np.linalg.norm(turn[-1, :2]), "<= 0.05", np.linalg.norm(turn[-1, :2]) <= 0.05, "m")]
+  return [Check.at_most("flat speed error", abs(speed / 0.5 - 1), 0.05),
+          Check.at_most("flat lateral drift", abs(qpos[-1, 1]), 0.02, "m"),
+          Check.at_most("yaw rate error", abs(rate / expected - 1), 0.10),
+          Check.at_most("turn-in-place drift", np.linalg.norm(turn[-1, :2]), 0.05, "m")]
 
 
 def _drive_flat(sim, belts, periods: int) -> np.ndarray:
-  """qpos after each of `periods` 0.25 s periods of constant belt speeds on the stair world's floor."""
+  """qpos after each of `periods` FLAT_PERIOD periods of constant belt speeds on the stair world's floor."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
   from scenes import staircase as sc  # noqa: PLC0415
   m = sim.with_boxes(*sc.step_boxes(sc.Staircase(jnp.float32(0.3), jnp.float32(0.17), jnp.int32(0))))
-  substeps = max(1, round(0.25 / sim.physics.timestep))
-  nj = sim.layout.n_joints
+  nj, substeps = sim.layout.n_joints, _substeps(sim.physics, FLAT_PERIOD)
   adv = jax.jit(lambda d, belts: sim.advance(m, d, belts, jnp.zeros(nj), substeps))  # one program for every command
   d, out = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(nj)), []
   for _ in range(periods):
@@ -124,15 +139,15 @@ def incline_check(physics) -> list[Check]:
   d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(nj))
   quat = jnp.array([math.cos(-angle / 2), 0.0, math.sin(-angle / 2), 0.0])
   d = d.replace(qpos=d.qpos.at[:3].set((sim.robot.spawn_height + 0.002) * jnp.asarray(n)).at[3:7].set(quat))
-  substeps = max(1, round(0.25 / physics.timestep))
+  substeps = _substeps(physics, FLAT_PERIOD)
   adv = jax.jit(lambda d: sim.advance(sim.model, d, jnp.zeros(6), jnp.zeros(nj), substeps))
-  for _ in range(4):
+  for _ in range(round(1.0 / FLAT_PERIOD)):  # settle 1 s
     d = adv(d)
   start = np.asarray(d.qpos[:3])
-  for _ in range(20):
+  for _ in range(round(5.0 / FLAT_PERIOD)):  # 5 s
     d = adv(d)
   creep = float(np.linalg.norm(np.asarray(d.qpos[:3]) - start))
-  return [Check("creep on 20-degree incline in 5 s", creep, "<= 0.01", creep <= 0.01, "m")]
+  return [Check.at_most("creep on 20-degree incline in 5 s", creep, 0.01, "m")]
 
 
 def stair_checks(physics, robot: str) -> list[Check]:
@@ -146,9 +161,9 @@ def stair_checks(physics, robot: str) -> list[Check]:
   from mjx_tracks.tools.drive import DriveSetup, scripted_rollouts, summarize  # noqa: PLC0415
   from scenes import staircase as sc  # noqa: PLC0415
   sim, tol = staircase_simulator(get_robot(robot), physics), default_config().episode.goal_tolerance
-  out = []
+  hardest, out = _paper_hardest(), []
   for direction in ("up", "down"):
-    cases = [("hardest", *HARDEST)] + ([("step", HARDEST[0], STEP_BELOW, 1), ("step", HARDEST[0], STEP_ABOVE, 1)]
+    cases = [("hardest", *hardest)] + ([("step", hardest[0], STEP_BELOW, 1), ("step", hardest[0], STEP_ABOVE, 1)]
                                        if robot == "1" and direction == "up" else [])
     stairs = sc.Staircase(*(jnp.asarray([c[i] for c in cases], t) for i, t in
                             ((1, jnp.float32), (2, jnp.float32), (3, jnp.int32))))
@@ -176,33 +191,35 @@ def c_engine_check(physics) -> list[Check]:
 
   from mjx_tracks.envs.config import default_config  # noqa: PLC0415
   from mjx_tracks.robots import get_robot  # noqa: PLC0415
+  from mjx_tracks.sim.physics import compile_model  # noqa: PLC0415
   from mjx_tracks.sim.pose import chassis_rpy  # noqa: PLC0415
   from mjx_tracks.sim.simulator import staircase_simulator  # noqa: PLC0415
-  sim, ref = (staircase_simulator(get_robot(1), p) for p in (physics, default_config().physics))
+  from scenes import staircase as sc  # noqa: PLC0415
+  sim = staircase_simulator(get_robot(1), physics)
+  mj = compile_model(sim.robot, sc.world_xml(), default_config().physics)  # the C engine's reference model
   d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(sim.layout.n_joints))
   quat = [math.cos(FALL["roll"] / 2), math.sin(FALL["roll"] / 2), 0.0, 0.0]
   qpos0 = np.asarray(d.qpos).copy()
   qpos0[2] += FALL["height"]
   qpos0[3:7] = quat
-  chunks = round(FALL["seconds"] / 0.05)  # compared every 0.05 s
-  step = jax.jit(lambda d: jax.lax.fori_loop(0, round(0.05 / physics.timestep), lambda _, x: sim.plain_step(sim.model, x), d))
+  chunks, substeps = round(FALL["seconds"] / FALL_PERIOD), _substeps(physics, FALL_PERIOD)
+  step = jax.jit(lambda d: jax.lax.fori_loop(0, substeps, lambda _, x: sim.plain_step(sim.model, x), d))
   d, ours = d.replace(qpos=jnp.asarray(qpos0)), []
   for _ in range(chunks):
     d = step(d)
     ours.append(np.asarray(d.qpos))
-  mj = ref.mj_model
   c = mujoco.MjData(mj)
   c.qpos[:] = qpos0
   theirs = []
-  for _ in range(len(ours)):
-    mujoco.mj_step(mj, c, nstep=round(0.05 / mj.opt.timestep))
+  for _ in range(chunks):
+    mujoco.mj_step(mj, c, nstep=round(FALL_PERIOD / mj.opt.timestep))
     theirs.append(c.qpos.copy())
   ours, theirs = np.stack(ours), np.stack(theirs)
   dz = float(np.abs(ours[:, 2] - theirs[:, 2]).max())
   rpy = [np.asarray(chassis_rpy(jnp.asarray(q))) for q in (ours, theirs)]
   dang = float(np.abs(rpy[0][:, :2] - rpy[1][:, :2]).max())
-  return [Check("fall vs C engine: height", dz, "<= 0.005", dz <= 0.005, "m"),
-          Check("fall vs C engine: roll / pitch", dang, "<= 0.02", dang <= 0.02, "rad")]
+  return [Check.at_most("fall vs C engine: height", dz, 0.005, "m"),
+          Check.at_most("fall vs C engine: roll / pitch", dang, 0.02, "rad")]
 
 
 def run(args) -> tuple[list[dict], dict]:

@@ -9,6 +9,10 @@ import platform
 import sys
 
 
+class BenchInputError(ValueError):
+  """Options a benchmark cannot run with: `python -m train.bench` reports it in one line (exit 2)."""
+
+
 def default_path(name: str) -> str:
   """results/bench/NAME-<device kind>.json (spaces as -), under the current folder."""
   import jax  # noqa: PLC0415
