@@ -13,10 +13,9 @@ import sys
 import threading
 import traceback
 
-from train.core.plan import DEFAULT_LIBRARY
 from train.db import ExperimentDB, utc_now
 from train.evaluation import EVAL_TRIALS
-from train.study.spec import Cell, study_from_dict
+from train.study.spec import Cell, cells, study_from_dict
 from train.study.worker import EVALUATE, TRAIN, read_pid_file, run_in_place
 
 STOPPED = 143  # train.run's exit code after SIGTERM (checkpoint written, policy exported)
@@ -37,13 +36,13 @@ def cell_of(spec: dict) -> Cell:
   checked like a study's; ConfigError names the faulty key."""
   group = {"name": "launch", "algo": spec.get("algo", "ppo"), "preset": spec.get("preset", "cpu"),
            "steps": [spec.get("steps", 2048)], "early_stop": spec.get("early_stop", ""),
-           "set": list(spec.get("overrides", [])), "hp": list(spec.get("hp", [])),
-           "library": spec.get("library", DEFAULT_LIBRARY), "backend": spec.get("backend", "cpu")}
+           "set": list(spec.get("overrides", [])), "backend": spec.get("backend", "cpu"),
+           **{k: spec[k] for k in ("hp", "library") if k in spec}}  # else the study's defaults
   study = study_from_dict({"name": "launch", "tasks": [spec.get("task")], "seeds": [spec.get("seed", 0)],
-                           "groups": [group], "eval_trials": max(spec.get("eval_trials", EVAL_TRIALS), 1)})
-  g = study.groups[0]
-  return Cell(g.name, study.tasks[0], g.steps[0], study.seeds[0], g.algo, g.preset, g.early_stop, g.set, g.backend, hp=g.hp,
-              library=g.library)
+                           "groups": [group], "eval_trials": max(spec.get("eval_trials", EVAL_TRIALS), 1),
+                           "baselines": []})
+  (cell,) = cells(study)  # the study's one run, as a study would run it
+  return cell
 
 
 class Launcher:
