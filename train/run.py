@@ -182,10 +182,6 @@ def main(argv: list[str] | None = None) -> int:
   if args.checkpoint_every < 0 or args.keep_checkpoints < 1:
     print("error: --checkpoint-every must be >= 0 and --keep-checkpoints >= 1", file=sys.stderr)
     return 2
-  if args.library not in (None, DEFAULT_LIBRARY) and (args.checkpoint_every, args.keep_checkpoints) != (CHECKPOINT_EVERY_S, KEEP):
-    print(f"error: --library {args.library} saves no checkpoints; drop --checkpoint-every and --keep-checkpoints",
-          file=sys.stderr)
-    return 2
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   if args.coordinator:

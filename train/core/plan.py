@@ -191,12 +191,15 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
 def _library_limits(library: str, args: argparse.Namespace, early: EarlyStop | None):
   """(early stop, probe interval, milestones) of a run another library trains: none of them; asking
   for one is refused (the preset's own early stop is dropped)."""
+  from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP  # noqa: PLC0415  (orbax: only for these runs)
   if library not in LIBRARIES:
     raise RunError(f"--library {library!r}: one of {', '.join(LIBRARIES)}")
   given = [f"--{n.replace('_', '-')}" for n in ("probe_every", "milestones", "coordinator")
            if getattr(args, n, None) not in (None, 0, "")]
   if args.early_stop not in (None, NO_EARLY_STOP):
     given.append("--early-stop")
+  given += [f"--{n.replace('_', '-')}" for n, default in (("checkpoint_every", CHECKPOINT_EVERY_S), ("keep_checkpoints", KEEP))
+            if getattr(args, n, default) != default]  # it saves none
   if given:
     raise RunError(f"--library {library} trains with {LIBRARIES[library]}; drop {', '.join(given)}")
   return None, 0, ()
