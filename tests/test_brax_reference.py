@@ -23,7 +23,8 @@ def test_brax_ppo_train_trains_the_env_and_is_recorded_like_any_run(tmp_path, ca
   act = load_policy(os.path.join(out, "policy"))
   a = np.asarray(act(np.zeros((3, 6), np.float32)))
   assert a.shape == (3, 5) and np.all(np.abs(a) <= 1)
-  capsys.readouterr()
+  said = capsys.readouterr().out
+  assert "done: 512 steps in " in said and "last training episodes" not in said  # none to report
   assert run.main(["--resume", out]) == 2  # Brax saves no checkpoints
   assert "was trained by --library brax, which saves no checkpoints" in capsys.readouterr().err
 

@@ -158,7 +158,8 @@ def finished_lines(plan: RunPlan, final: dict, db_path: str | None) -> str:
       ("tipped_rate", "tip-overs")) if isinstance(final.get(key), (int, float)))
   why = {"done": "", "early_stop": f" (early stop: {plan.early_stop})"}.get(final["reason"], "")
   return "\n".join([
-      f"done{why}: {final['step']:,} steps in {final.get('wall_s', 0):,.0f} s; last training episodes: {figures}",
+      f"done{why}: {final['step']:,} steps in {final.get('wall_s', 0):,.0f} s"
+      + (f"; last training episodes: {figures}" if figures else ""),  # --library brax reports none
       f"made: {out}/ with policy/ (the exported policy), "
       + ("checkpoints/, run.json, tb/ (TensorBoard)" if plan.library == DEFAULT_LIBRARY else "run.json")
       + (f"; records in {db_path}" if db_path else ""),
