@@ -1,5 +1,6 @@
-"""/api/tasks and /api/validate: the tasks, and a configuration checked by the loader the command
-line uses (configs/defaults.yaml <- the task's YAML <- overrides); errors name their field."""
+"""/api/tasks, /api/trainers and /api/validate: the tasks, the algorithms with their presets and the
+training libraries (train.core), and a configuration checked by the loader the command line uses
+(configs/defaults.yaml <- the task's YAML <- overrides); errors name their field."""
 
 from __future__ import annotations
 
@@ -27,6 +28,15 @@ def config_error(e: ConfigError) -> JSONResponse:
 @router.get("/tasks")
 def tasks() -> list[str]:
   return available_tasks()
+
+
+@router.get("/trainers")
+def trainers() -> dict:
+  """{algos: {algo: [preset, ...]}, libraries: {name: what it trains with}, default_library}: the
+  form's choices, from train.core's presets and libraries."""
+  from train.core.plan import DEFAULT_LIBRARY, LIBRARIES  # noqa: PLC0415
+  from train.core.presets import PRESETS  # noqa: PLC0415
+  return {"algos": {a: list(p) for a, p in PRESETS.items()}, "libraries": LIBRARIES, "default_library": DEFAULT_LIBRARY}
 
 
 @router.get("/schema/{task}")
