@@ -23,7 +23,7 @@ class Metric:
   integer: bool = False  # stored as an integer (a flag or a count)
 
 
-REWARD_TERMS = ("progress", "safety", "tipover", "goal")  # the reward's named terms (mjx_tracks.envs.rewards)
+REWARD_TERMS = ("progress", "safety", "tipover", "goal", "collision")  # the reward's named terms (mjx_tracks.envs.rewards)
 
 # per control step: the env's state.metrics, in this order; summed over an episode by Brax's
 # episode wrapper and by evaluation (EPISODE figures are made from those sums)
@@ -37,6 +37,8 @@ STEP = (
     Metric("goal_reached", "", "sum", True, "1 at the step the robot reaches the goal (it ends the episode)"),
     Metric("moved_away", "", "sum", False, "1 at the step the robot ends too far from the goal"),
     Metric("physics_nan", "", "sum", False, "1 at a step whose physics blew up (the episode ends)"),
+    Metric("collision", "", "sum", False, "1 at the episode's first step in which the robot touched a wall or "
+           "obstacle (nav scenes; a floor obstacle: with anything but a track belt); reward/collision charges every one"),
 )
 STEP_NAMES = tuple(m.name for m in STEP)
 
@@ -48,6 +50,7 @@ EPISODE = (
     Metric("pitch_rate", "rad/s", "mean", False, "mean |pitch rate| over the episode"),
     Metric("tipped_over", "", "rate", False, "the robot tipped over", True),
     Metric("length", "steps", "mean", None, "control steps the episode lasted", True),
+    Metric("collided", "", "rate", False, "the robot touched a wall or obstacle at least once (nav scenes)", True),
 )
 EPISODE_NAMES = tuple(m.name for m in EPISODE)
 BY_NAME = {m.name: m for m in EPISODE}
@@ -55,7 +58,8 @@ BY_NAME = {m.name: m for m in EPISODE}
 # a training report's columns (database table `stats`): each episode figure's mean over the
 # episodes of a report, named by how it aggregates; `return_mean` and `eps` besides
 REPORT_COLUMN = {"progress": "progress_mean", "cog_deviation": "cog_deviation_mean", "pitch_rate": "pitch_rate_mean",
-                 "tipped_over": "tipped_rate", "success": "success_rate"}
+                 "tipped_over": "tipped_rate", "success": "success_rate",
+                 "collided": "collision_rate"}
 REPORT = (Metric("return_mean", "", "mean", True, "mean return of the episodes of the report"),
           *(dataclasses.replace(BY_NAME[n], name=c) for n, c in REPORT_COLUMN.items()),
           Metric("eps", "", "last", True, "the curriculum's difficulty"))
@@ -88,6 +92,7 @@ def episode_figures(sums: dict, length) -> dict[str, np.ndarray]:
       "pitch_rate": f("pitch_rate") / np.maximum(length, 1.0),  # rad/s, mean |pitch rate|
       "tipped_over": (f("tipped_over") > 0).astype(np.float64),
       "length": length,
+      "collided": (f("collision") > 0).astype(np.float64),
   }
   assert tuple(figures) == EPISODE_NAMES
   return figures
@@ -95,5 +100,5 @@ def episode_figures(sums: dict, length) -> dict[str, np.ndarray]:
 
 def trial_row(figures: dict, i: int) -> dict:
   """Trial i's EPISODE figures as a database row: integers where the metric is one."""
-  return {m.name: (int(figures[m.name][i] > 0) if m.name != "length" else int(figures[m.name][i])) if m.integer
+  return {m.name: (int(figures[m.name][i] > 0) if m.aggregate == "rate" else int(figures[m.name][i])) if m.integer
           else float(figures[m.name][i]) for m in EPISODE}

@@ -2,7 +2,7 @@
 
 Area: x in [0, 12] m (start area [0, 2], obstacle area [2, 10], goal area [10, 12]),
 y in [-W/2, W/2] with W = 10 m, closed by four wall planes. xi = (W1, L1, W2, L2, C), with the
-gap C ~ U(C_min, C_max) = U(1, 2) m (the original's 1 + U(0, 1)):
+gap C ~ U(C_min, C_max) (scene.nav_gap; the original's U(1, 2) m, 1 + U(0, 1)):
   hallway: obstacle 1 juts W1 ~ U(W/2 - C/2, W - C) from the left wall, obstacle 2 juts
            W2 ~ U(0, W - C - W1) from the right wall, so the hallway between them is >= C wide;
            both run L_i ~ U(L/2, L) along x (L = 8 m) from random points of the obstacle area.
@@ -10,11 +10,16 @@ gap C ~ U(C_min, C_max) = U(1, 2) m (the original's 1 + U(0, 1)):
            obstacle 2 from the right wall at x = 2 + 2L/3, each W_i ~ U(W/2 - C/2, W - C)
            long, so the robot must weave; L_i is their thickness (0.3 m).
 Components are drawn as u in [0, 1]^5 by the scene's sampler (uniform or incremental over unit
-ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or random x ~ U(0.5, 1.5),
-y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2). Goal: fixed (11, 0), or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
+ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or random x ~ U(0.75, 1.5),
+y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2) (x from 0.75 m: robot 1's footprint reaches 0.64 m from its
+centre, and from x = 0.5 m one spawn in 17 started inside the back wall). Goal: fixed (11, 0), or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
 Floor obstacles (`floor_obstacles` of them): low boxes to drive over or around, each
 centred at x ~ U(2.5, 9.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
 height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays.
+Free-space distance (episode.distance: geodesic): the shortest path to the goal around the two wall
+obstacles for a robot of radius CLEARANCE (scenes.geodesic); floor obstacles can be driven over, so
+they do not lengthen it. Collisions (episode / reward settings): any robot contact with a wall or a
+wall obstacle, or a contact of anything but a track belt with a floor obstacle (COLLISION_GEOMS).
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ import jax
 import jax.numpy as jnp
 
 from scenes import samplers
+from scenes.geodesic import geodesic_distance
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
 from scenes.world import SCENE_BOX, world_geom_attrs
@@ -32,11 +38,16 @@ from scenes.world import SCENE_BOX, world_geom_attrs
 AREA_W = 10.0  # m, W
 OBSTACLE_L = 8.0  # m, L
 START_X, GOAL_X, AREA_LEN = 2.0, 10.0, 12.0  # m
-GAP = (1.0, 2.0)  # m, C range
+NAV_GAP_LIMITS = (0.85, 3.0)  # m, what scene.nav_gap may ask: robot 1 is 0.81 m wide
 WALL_THICKNESS = 0.3  # m, zigzag walls
 OBSTACLE_HEIGHT = 1.0  # m
 FLOOR_X, FLOOR_Y, FLOOR_SIDE = (START_X + 0.5, GOAL_X - 0.5), (-AREA_W / 2 + 0.5, AREA_W / 2 - 0.5), (0.3, 0.8)  # m
 MAX_FLOOR_OBSTACLES = 12
+WALL_OBSTACLES = 2  # the first scene boxes: the hallway's or zigzag's obstacles; floor obstacles follow
+WALLS = ("wall_left", "wall_right", "wall_back", "wall_front")  # the area's wall planes (geom names)
+CLEARANCE = 0.4  # m, the robot's radius for the free-space distance: robot 1's half-width (0.39 m)
+SPAWN_X = (0.75, 1.5)  # m, random spawns' x range
+AREA_LO, AREA_HI = (0.0, -AREA_W / 2), (AREA_LEN, AREA_W / 2)  # m, the area's corners (x, y)
 NAV_AREAS = ("hallway", "zigzag")  # the area kinds (scene.nav_kinds)
 UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
               integer=(False,) * 5, hard=("high", "high", "high", "high", "low"))
@@ -58,6 +69,7 @@ class NavScene:
   random_goal: bool
   floor_obstacles: int  # low boxes in the obstacle area (0..MAX_FLOOR_OBSTACLES)
   floor_height: tuple[float, float]  # m, their height ~ U(min, max)
+  gap: tuple[float, float] = (1.0, 2.0)  # m, C ~ U(min, max)
 
   def __post_init__(self):
     if not self.kinds or any(k not in NAV_AREAS for k in self.kinds):
@@ -85,7 +97,7 @@ class NavScene:
     kinds = jnp.array([{"hallway": 0, "zigzag": 1}[k] for k in self.kinds])
     variant = kinds[jax.random.randint(k_kind, (), 0, len(self.kinds))]
     u = samplers.sample(k_u, eps, UNIT, self.sampler, self.variant)
-    c = _lerp(*GAP, u[4])
+    c = _lerp(*self.gap, u[4])
     w1 = _lerp(AREA_W / 2 - c / 2, AREA_W - c, u[0])
     half_w = AREA_W / 2
     # hallway
@@ -107,7 +119,7 @@ class NavScene:
                     jnp.where(zig, WALL_THICKNESS, l2), c])
     s = jax.random.uniform(k_s, (3,))
     if self.random_spawn:
-      spawn, yaw = jnp.array([_lerp(0.5, 1.5, s[0]), _lerp(-4.0, 4.0, s[1]), 0.0]), _lerp(-jnp.pi / 2, jnp.pi / 2, s[2])
+      spawn, yaw = jnp.array([_lerp(*SPAWN_X, s[0]), _lerp(-4.0, 4.0, s[1]), 0.0]), _lerp(-jnp.pi / 2, jnp.pi / 2, s[2])
     else:
       spawn, yaw = jnp.array([1.0, 0.0, 0.0]), jnp.float32(0.0)
     g = jax.random.uniform(k_g, (2,))
@@ -117,6 +129,19 @@ class NavScene:
       f_pos, f_size = self.floor_boxes(jax.random.fold_in(key, 1))
       pos, size = jnp.concatenate([pos, f_pos]), jnp.concatenate([size, f_size])
     return SceneState(pos, size, jnp.zeros(pos.shape[0]), spawn, yaw, goal, jnp.float32(0.0), xi, variant.astype(jnp.int32))
+
+  def collision_geoms(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(geoms no part of the robot may touch, geoms only the track belts may touch): the walls and
+    wall obstacles; the floor obstacles (driven over on the belts)."""
+    boxes = [f"{SCENE_BOX}{k}" for k in range(WALL_OBSTACLES + self.floor_obstacles)]
+    return WALLS + tuple(boxes[:WALL_OBSTACLES]), tuple(boxes[WALL_OBSTACLES:])
+
+  def free_space_distance(self, scene: SceneState, pos: jax.Array) -> jax.Array:
+    """Length (m) of the shortest path from pos (x, y, ...) to the goal around the wall obstacles
+    (module docstring)."""
+    pos_b, size_b = scene.box_pos[:WALL_OBSTACLES, :2], scene.box_size[:WALL_OBSTACLES, :2]
+    return geodesic_distance(pos[:2], scene.goal[:2], pos_b - size_b, pos_b + size_b,
+                             jnp.array(AREA_LO), jnp.array(AREA_HI), CLEARANCE)
 
   def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the

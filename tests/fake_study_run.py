@@ -80,7 +80,7 @@ def evaluate(argv: list[str]) -> int:
   for budget in budgets:
     for scene in SCENES:
       rows = [{"scene": scene, "budget": budget, "trial": i, "progress": 0.5, "cog_deviation": 0.1,
-               "pitch_rate": 0.2, "tipped_over": 0, "length": 10,
+               "pitch_rate": 0.2, "tipped_over": 0, "length": 10, "collided": 0,
                "success": fake_success(meta["task"], meta["seed"], budget or meta["steps"], i)} for i in range(trials)]
       db.log_evals(meta["run_id"], rows, replace=(scene, budget))
   json.dump({"metrics": {"success": {"mean": 1.0}}}, open(os.path.join(out, "eval-hardest.json"), "w"))

@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+from mjx_tracks.metrics import EPISODE_NAMES
 from train import evaluate
 from train.db import ExperimentDB
 from train.evaluate import main as evaluate_main
@@ -73,8 +74,7 @@ def test_an_evaluation_of_fewer_trials_never_overwrites_a_fuller_report(tmp_path
   def write(trials: int) -> str:
     args = argparse.Namespace(run_dir=str(tmp_path / "r"), trials=trials, eps=1.0, checkpoint=None, out=None,
                               db=db.path, argv=["r", "--trials", str(trials)])
-    figures = {k: np.full(trials, 0.5) for k in ("progress", "success", "cog_deviation", "pitch_rate",
-                                                 "tipped_over", "length")}
+    figures = {k: np.full(trials, 0.5) for k in EPISODE_NAMES}
     return evaluate._write_report(args, meta, "hardest", None, 100, figures)
 
   full = write(100)

@@ -121,8 +121,10 @@ def test_nav_suites_evaluate_each_area_kind_alone():
   from mjx_tracks.envs.task_env import make_scene
   from train.evaluation import scene_config, suite_scenes
   cfg = load_config("nav")
-  assert suite_scenes(cfg) == ["uniform", "nav/hallway", "nav/zigzag"]
-  assert suite_scenes(load_config("nav", ["scene.nav_kinds=[zigzag]"])) == ["uniform"]
+  held_out = [f"held-out/{h.name}" for h in cfg.evaluation.held_out_nav]
+  assert held_out == ["held-out/narrow-gap", "held-out/dense-obstacles"]
+  assert suite_scenes(cfg) == ["uniform", "nav/hallway", "nav/zigzag", *held_out]
+  assert suite_scenes(load_config("nav", ["scene.nav_kinds=[zigzag]"])) == ["uniform", *held_out]
   for variant, kind in enumerate(("hallway", "zigzag")):
     scene = make_scene(scene_config(cfg, f"nav/{kind}").scene)
     s = jax.vmap(scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 16), 0.5)
@@ -154,6 +156,17 @@ def test_a_recorded_config_from_before_the_evaluation_section_loads_without_held
   raw = load_config("asc-inc-cog").to_dict()
   del raw["evaluation"]
   assert from_dict(raw).evaluation.held_out == ()
+
+
+def test_a_recorded_nav_config_from_before_collision_safety_loads_with_the_papers_monitor():
+  raw = load_config("nav").to_dict()
+  for section, key in (("reward", "progress_form"), ("reward", "collision_penalty"), ("episode", "distance"),
+                       ("episode", "end_on_collision"), ("scene", "nav_gap"), ("evaluation", "held_out_nav")):
+    del raw[section][key]
+  cfg = from_dict(raw)
+  assert (cfg.reward.progress_form, cfg.reward.collision_penalty, cfg.episode.distance) == ("closest", 0.0, "euclidean")
+  assert not cfg.episode.end_on_collision and tuple(cfg.scene.nav_gap) == (1.0, 2.0)
+  assert [h.name for h in cfg.evaluation.held_out_nav] == ["narrow-gap", "dense-obstacles"]
 
 
 def test_declared_ranges_are_what_validation_checks_and_what_the_form_shows():

@@ -178,6 +178,28 @@ def test_navigation_ends_at_the_goal_and_when_moving_away():
   assert not np.asarray(s.metrics["tipped_over"]).any()
 
 
+def test_navigation_measures_the_free_space_path_and_a_collision_ends_the_episode():
+  """The start distance is the scene's free-space distance minus the tolerance; env 0 is put with
+  its left side 0.1 m inside the first wall obstacle's near face: the step counts a collision,
+  charges the penalty and ends the episode; env 1, in the open, does not."""
+  core, _, reset, step, n = _compiled("nav")
+  cfg = core.cfg
+  assert cfg.episode.distance == "geodesic" and cfg.episode.end_on_collision and cfg.reward.collision_penalty > 0
+  s = reset(jax.random.split(jax.random.PRNGKey(8), n))
+  es = s.pipeline_state
+  chassis = es.data.xpos[:, core.sim.layout.chassis_body]
+  free = jax.vmap(core.scene.free_space_distance)(es.scene, chassis)
+  np.testing.assert_allclose(np.asarray(es.d0), np.asarray(free) - cfg.episode.goal_tolerance, rtol=1e-5)
+  box_pos, box_size = np.asarray(es.scene.box_pos[0, 0]), np.asarray(es.scene.box_size[0, 0])
+  face_y = box_pos[1] - box_size[1]  # the obstacle juts from the left wall: its face toward -y
+  q = es.data.qpos.at[0, :3].set(jnp.array([box_pos[0], face_y - 0.405 + 0.1, es.data.qpos[0, 2]]))
+  q = q.at[0, 3:7].set(jnp.array([1.0, 0.0, 0.0, 0.0]))  # heading +x, the left flippers toward the face
+  s = step(s.replace(pipeline_state=es.replace(data=es.data.replace(qpos=q))), jnp.zeros((n, core.action_size)))
+  assert np.asarray(s.metrics["collision"]).tolist() == [1.0, 0.0]
+  assert np.asarray(s.done).tolist() == [1.0, 0.0]
+  np.testing.assert_allclose(np.asarray(s.metrics["reward/collision"]), [-cfg.reward.collision_penalty, 0.0])
+
+
 def test_the_spawn_is_off_the_stairs_and_the_cog_term_waits_for_them():
   core, _, reset, step, n = _compiled("asc-inc-cog")
   s = step(reset(jax.random.split(jax.random.PRNGKey(5), n)), jnp.zeros((n, core.action_size)))

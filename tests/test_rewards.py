@@ -12,6 +12,7 @@ from mjx_tracks.envs.rewards import (ON_STAIRS_MARGIN, Monitor, cog_deviation, g
 
 _D = default_config()
 EP = _D.episode
+NO_HIT = jnp.bool_(False)  # the step touched no wall or obstacle
 
 
 def RewardConfig(**kw):
@@ -36,6 +37,33 @@ def test_moving_half_a_metre_toward_a_goal_two_metres_away_earns_a_quarter():
   assert float(r + r3 + r4) == pytest.approx(1.0)
 
 
+def test_potential_progress_pays_back_a_detour_and_sums_to_the_distance_covered():
+  """Goal 2 m away: 0.5 m toward it (+0.25), 1 m back (-0.5), 1.5 m toward it (+0.75), then to it."""
+  d0 = jnp.float32(2.0)
+  total, prev = 0.0, d0
+  for dist, want in ((1.5, 0.25), (2.5, -0.5), (1.0, 0.75), (-0.1, 0.5)):  # below 0: reached, counts as 0
+    r, prev = progress_step(jnp.float32(dist), prev, d0, "potential")
+    assert float(r) == pytest.approx(want)
+    total += float(r)
+  assert total == pytest.approx(1.0)
+  # the paper's rule pays the same first 0.5 m, nothing for the way back, then only the new ground
+  r, closest = progress_step(jnp.float32(1.5), d0, d0, "closest")
+  r2, closest = progress_step(jnp.float32(2.5), closest, d0, "closest")
+  r3, _ = progress_step(jnp.float32(1.0), closest, d0, "closest")
+  assert [float(r), float(r2), float(r3)] == pytest.approx([0.25, 0.0, 0.25])
+
+
+def test_a_collision_costs_its_penalty_and_ends_the_episode_only_if_asked():
+  upright, args = jnp.zeros(3), (jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0))
+  for end in (False, True):
+    mon = Monitor(RewardConfig(kind="free", collision_penalty=0.3), dataclasses.replace(EP, end_on_collision=end))
+    terms, _, _, term, flags = mon.evaluate(*args, upright, jnp.float32(0.0), jnp.float32(1.0), jnp.bool_(True))
+    assert float(terms["collision"]) == pytest.approx(-0.3) and bool(flags["collided"])
+    assert bool(term) == end
+    terms, _, _, term, _ = mon.evaluate(*args, upright, jnp.float32(0.0), jnp.float32(1.0), NO_HIT)
+    assert float(terms["collision"]) == 0.0 and not bool(term)
+
+
 def test_cog_deviation_hand_cases():
   flat = cog_deviation(jnp.array([0.1, 0.0, 0.2]), jnp.zeros(3), jnp.float32(0.0))
   assert float(flat) == pytest.approx(np.hypot(0.1, 0.2))  # no incline: |(x, z)|
@@ -55,19 +83,19 @@ def test_reward_functions_and_termination():
   for kind, expected in (("free", 0.0), ("cog", -0.05 * 0.2), ("angular", -0.05 * 0.2)):
     mon = Monitor(RewardConfig(kind=kind, cog_scale=0.05, angular_scale=0.05), ep)
     terms, prog, _, term, _ = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
-                                           upright, jnp.mean(window), jnp.float32(1.0))
+                                           upright, jnp.mean(window), jnp.float32(1.0), NO_HIT)
     assert float(terms["progress"]) == pytest.approx(0.25)
     assert float(terms["safety"]) == pytest.approx(expected)
     assert not bool(term)
   mon = Monitor(RewardConfig(kind="cog", cog_scale=0.05), ep)
   _, _, _, term, flags = mon.evaluate(jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0),
-                                      jnp.array([0.0, 1.7, 0.0]), jnp.mean(window), jnp.float32(1.0))
+                                      jnp.array([0.0, 1.7, 0.0]), jnp.mean(window), jnp.float32(1.0), NO_HIT)
   assert bool(term) and bool(flags["tipped"])
   _, _, _, term, flags = mon.evaluate(jnp.float32(-0.01), jnp.float32(2.0), jnp.float32(2.0),
-                                      upright, jnp.mean(window), jnp.float32(1.0))
+                                      upright, jnp.mean(window), jnp.float32(1.0), NO_HIT)
   assert bool(term) and bool(flags["reached"])
   _, _, _, term, flags = mon.evaluate(jnp.float32(2.5), jnp.float32(2.0), jnp.float32(2.0),
-                                      upright, jnp.mean(window), jnp.float32(1.0))
+                                      upright, jnp.mean(window), jnp.float32(1.0), NO_HIT)
   assert bool(term) and bool(flags["away"])  # 2.5 > 1.2 * 2.0
 
 
@@ -123,7 +151,7 @@ def test_the_episode_mean_form_sums_to_the_episodes_mean_sample_whatever_its_len
 def test_reaching_the_goal_earns_the_goal_bonus_once_it_is_reached():
   mon = Monitor(RewardConfig(goal_bonus=0.5), EP)
   reached, *_ = mon.evaluate(jnp.float32(-0.01), jnp.float32(0.1), jnp.float32(2.0), jnp.zeros(3), jnp.float32(0.0),
-                             jnp.float32(1.0))
+                             jnp.float32(1.0), NO_HIT)
   short, *_ = mon.evaluate(jnp.float32(0.01), jnp.float32(0.1), jnp.float32(2.0), jnp.zeros(3), jnp.float32(0.0),
-                           jnp.float32(1.0))
+                           jnp.float32(1.0), NO_HIT)
   assert float(reached["goal"]) == 0.5 and float(short["goal"]) == 0.0

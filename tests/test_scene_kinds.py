@@ -26,6 +26,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
     ("spiral-up", "scene.random_goal=true", "scene.random_goal", "centre line"),
     ("step-up", "evaluation.held_out=[{name: a, tread: 0.4, riser: 0.2, steps: 3}]", "evaluation.held_out", "stair task"),
     ("asc-inc-cog", "scene.kind=lava", "scene.kind", "must be one of ['stairs', 'terrain', 'nav']"),
+    ("asc-inc-cog", "episode.distance=geodesic", "episode.distance", "stairs scenes measure ['euclidean']"),
+    ("nav", "episode.distance=manhattan", "episode.distance", "must be one of ['euclidean', 'geodesic']"),
+    ("step-up", "episode.end_on_collision=true", "episode.end_on_collision", "nothing to collide with"),
+    ("asc-inc-cog", "reward.collision_penalty=0.5", "reward.collision_penalty", "nothing to collide with"),
+    ("nav", "reward.progress_form=greedy", "reward.progress_form", "must be one of ['closest', 'potential']"),
 ])
 def test_invalid_combinations_are_refused_at_load_naming_the_key(task, override, key, words):
   if words is None:
@@ -60,3 +65,22 @@ def test_no_scene_kind_name_is_compared_outside_the_registry():
            for p in (ROOT / folder).rglob("*.py") if "kinds" not in p.parent.name
            for i, line in enumerate(p.read_text().splitlines(), 1) if compared.search(line)]
   assert not found
+
+
+def test_held_out_navigation_areas_narrow_the_gap_or_add_obstacles_and_stay_passable():
+  import jax
+  import numpy as np
+  from mjx_tracks.envs.task_env import make_scene
+  cfg = load_config("nav")
+  kind = scene_kind("nav")
+  assert [s for s in kind.suite(cfg) if s.startswith("held-out/")] == ["held-out/narrow-gap", "held-out/dense-obstacles"]
+  narrow, dense = (make_scene(kind.pinned(cfg, f"held-out/{n}").scene) for n in ("narrow-gap", "dense-obstacles"))
+  assert dense.floor_obstacles == 12 and narrow.floor_obstacles == 0
+  s = jax.vmap(narrow.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 200), 0.5)
+  np.testing.assert_allclose(np.asarray(s.xi[:, 4]), 0.9, atol=1e-6)  # C, m
+  free = jax.vmap(narrow.free_space_distance)(s, s.spawn_pos)
+  assert np.isfinite(np.asarray(free)).all()  # a path for the robot's clearance remains
+  with pytest.raises(ConfigError, match=r"evaluation.held_out_nav\[0\].gap: needs 0.85"):
+    load_config("nav", ["evaluation.held_out_nav=[{name: slit, gap: [0.5, 0.5], floor_obstacles: 0}]"])
+  with pytest.raises(ConfigError, match="held-out areas"):
+    kind.pinned(cfg, "held-out/middle")

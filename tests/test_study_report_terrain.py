@@ -16,7 +16,7 @@ def _results() -> StudyResults:
   runs = []
   for c in cells(SPEC):
     evals = [{"scene": scene, "budget": None, "trial": i, "success": ok, "progress": ok, "cog_deviation": 0.0,
-              "pitch_rate": 0.1, "tipped_over": 0} for (task, scene), ok in SUCCESS.items() if task == c.task
+              "pitch_rate": 0.1, "tipped_over": 0, "collided": 1 - ok} for (task, scene), ok in SUCCESS.items() if task == c.task
              for i in range(4)]
     runs.append(RunResult(c, f"{c.task}-{c.seed}", [], evals))
   return StudyResults(SPEC, "/nowhere/t", runs, {c.id: {"status": "done", "attempts": []} for c in cells(SPEC)})
@@ -34,8 +34,8 @@ def test_the_mixed_policy_sits_beside_each_kinds_specialist():
 
 def test_per_kind_hardest_rows_runs_counted_on_any_scene_and_no_figure_9_without_the_papers_tasks():
   rows = suite_table(_results())
-  assert rows[2:] == ["| ppo | mixed-terrain | 100 | hardest/uplift | 3 | 1.00 [1.00, 1.00] | 1.00 [1.00, 1.00] |",
-                      "| ppo | mixed-terrain | 100 | hardest/waves | 3 | 0.00 [0.00, 0.00] | 0.00 [0.00, 0.00] |"]
+  assert rows[2:] == ["| ppo | mixed-terrain | 100 | hardest/uplift | 3 | 1.00 [1.00, 1.00] | 1.00 [1.00, 1.00] | 0.00 [0.00, 0.00] |",
+                      "| ppo | mixed-terrain | 100 | hardest/waves | 3 | 0.00 [0.00, 0.00] | 0.00 [0.00, 0.00] | 1.00 [1.00, 1.00] |"]
   mixed = next(r for r in final_table(_results()) if "| mixed-terrain |" in r)
   assert mixed.startswith("| ppo | mixed-terrain | 100 | 3 | - | - | - |")  # no 'hardest' of its own here
   text = report_text(_results(), [], "cmd")

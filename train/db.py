@@ -22,6 +22,8 @@ import sqlite3
 import sys
 from typing import Any, Iterator
 
+import numpy as np
+
 from mjx_tracks.metrics import EPISODE, EPISODE_NAMES, REPORT_COLUMN
 
 DEFAULT_ROOT = "runs"
@@ -67,8 +69,10 @@ EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
                 "failed": "failed", "crashed": "crashed"}
 EVAL_COLUMNS = ("scene", "budget", "trial", *EPISODE_NAMES)  # budget: the milestone of the policy (train.run --milestones); NULL: final
-# columns added since databases were first written: table -> (column, type)
-ADDED_COLUMNS = {"stats": (("source", "TEXT"),), "evals": (("budget", "INTEGER"),)}
+# columns a database written before they existed may lack: table -> (column, type); every metric
+# column, so a metric added to mjx_tracks.metrics reaches old databases too (NULL in their old rows)
+ADDED_COLUMNS = {"stats": (("source", "TEXT"), *((c, "REAL") for c in REPORT_COLUMN.values())),
+                 "evals": (("budget", "INTEGER"), *((m.name, "INTEGER" if m.integer else "REAL") for m in EPISODE))}
 
 
 def utc_now() -> str:
@@ -325,10 +329,10 @@ def _show(db: ExperimentDB, run: dict) -> None:
   if stats:
     print("last statistics:", json.dumps({k: stats[-1][k] for k in STAT_COLUMNS}))
   for (scene, budget), trials in db.eval_groups(run["run_id"]).items():
-    mean = lambda k: sum(t[k] for t in trials) / len(trials)
+    mean = lambda k: float(np.mean([t[k] if t.get(k) is not None else np.nan for t in trials]))  # nan: not recorded
     at = f" @ {budget:,} steps" if budget else ""
     print(f"eval {scene}{at}: {len(trials)} trials, progress {mean('progress'):.3f}, "
-          f"success {mean('success'):.2f}, tipped {mean('tipped_over'):.2f}")
+          f"success {mean('success'):.2f}, tipped {mean('tipped_over'):.2f}, collided {mean('collided'):.2f}")
 
 
 def _export(db: ExperimentDB, run_id: str, path: str | None) -> None:

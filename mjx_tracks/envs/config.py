@@ -23,7 +23,7 @@ import yaml
 from mjx_tracks.bounds import bound, violation
 from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
-from scenes.navigation import MAX_FLOOR_OBSTACLES
+from scenes.navigation import MAX_FLOOR_OBSTACLES, NAV_GAP_LIMITS
 from scenes.terrain_kinds import TERRAIN_PARAMS
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
@@ -205,6 +205,7 @@ class SceneConfig:
   nav_kinds: tuple[str, ...]
   nav_floor_obstacles: int = dataclasses.field(metadata=bound(0, MAX_FLOOR_OBSTACLES))  # nav: low boxes in the obstacle area
   nav_floor_height: tuple[float, float]  # m, nav: their height ~ U(min, max)
+  nav_gap: tuple[float, float]  # m, nav: the gap C between the wall obstacles ~ U(min, max) (hard: narrow)
   terrains: tuple[str, ...]  # terrain: the kinds drawn per episode (scenes.terrain)
   terrain: TerrainRanges  # every terrain kind's parameter ranges
   random_spawn: bool
@@ -228,6 +229,9 @@ class SceneConfig:
     _validate_terrain_ranges(self.terrain, key)
     lo, hi = self.nav_floor_height
     require(0.01 <= lo <= hi <= 0.5, f"{key}.nav_floor_height", f"needs 0.01 <= min <= max <= 0.5, got {[lo, hi]}")
+    lo, hi = self.nav_gap
+    require(NAV_GAP_LIMITS[0] <= lo <= hi <= NAV_GAP_LIMITS[1], f"{key}.nav_gap",
+            f"needs {NAV_GAP_LIMITS[0]} <= min <= max <= {NAV_GAP_LIMITS[1]}, got {[lo, hi]}")
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
     require(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
     hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
@@ -242,6 +246,8 @@ class SceneConfig:
 # how the safety penalty is spread over an episode (mjx_tracks.envs.rewards.Monitor): the paper's moving
 # window of samples per step, or the change of the episode's running mean (its sum: the mean)
 SAFETY_FORMS = ("window", "episode_mean")
+PROGRESS_FORMS = ("closest", "potential")  # mjx_tracks.envs.rewards: the paper's closest-so-far rule | potential-based
+DISTANCES = ("euclidean", "geodesic")  # what the goal distance measures (scenes.kinds: SceneKind.distances)
 JITTER_LIMITS = (0.5, 3.1416, 1.0)  # m, rad, rad: the most a start jitter / trial variation may vary
 
 
@@ -267,11 +273,15 @@ class RewardConfig:
   normalize_episodes: int = dataclasses.field(metadata=bound(1))
   safety_window: int = dataclasses.field(metadata=bound(1))  # samples averaged by the penalty
   safety_form: str  # SAFETY_FORMS
+  progress_form: str  # PROGRESS_FORMS
+  collision_penalty: float = dataclasses.field(metadata=bound(0.0))  # per control step with a collision
 
   def validate(self, key: str) -> None:
     require(self.kind in REWARD_SIGNALS, f"{key}.kind", lambda: f"must be one of {list(REWARD_SIGNALS)}, got {show(self.kind)}")
     require(self.safety_form in SAFETY_FORMS, f"{key}.safety_form",
             lambda: f"must be one of {list(SAFETY_FORMS)}, got {show(self.safety_form)}")
+    require(self.progress_form in PROGRESS_FORMS, f"{key}.progress_form",
+            lambda: f"must be one of {list(PROGRESS_FORMS)}, got {show(self.progress_form)}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -279,9 +289,12 @@ class EpisodeConfig:
   max_steps: int = dataclasses.field(metadata=bound(1, 100_000))  # control steps
   goal_tolerance: float = dataclasses.field(metadata=bound(0.0))  # m, subtracted from the goal distance (reference)
   away_factor: float = dataclasses.field(metadata=bound(1.0, lo_open=True))  # terminate when dist > away_factor * d0
+  distance: str  # DISTANCES: what dist and d0 measure
+  end_on_collision: bool  # a collision (scenes.kinds: SceneKind.collision_geoms) ends the episode
 
   def validate(self, key: str) -> None:
-    """Ranges only: declared on the fields, checked when the section is built."""
+    require(self.distance in DISTANCES, f"{key}.distance",
+            lambda: f"must be one of {list(DISTANCES)}, got {show(self.distance)}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -319,14 +332,30 @@ class HeldOutTerrain:
 
 
 @dataclasses.dataclass(frozen=True)
+class HeldOutNav:
+  """Navigation areas every finished study run of a nav task is evaluated on, beyond its training
+  ranges: the task's areas with these gaps and floor obstacles."""
+  name: str
+  gap: tuple[float, float]  # m, C ~ U(min, max) (SceneConfig.nav_gap)
+  floor_obstacles: int = dataclasses.field(metadata=bound(0, MAX_FLOOR_OBSTACLES))
+
+  def validate(self, key: str) -> None:
+    require_plain_name(self.name, f"{key}.name")
+    lo, hi = self.gap
+    require(NAV_GAP_LIMITS[0] <= lo <= hi <= NAV_GAP_LIMITS[1], f"{key}.gap",
+            f"needs {NAV_GAP_LIMITS[0]} <= min <= max <= {NAV_GAP_LIMITS[1]}, got {[lo, hi]}")
+
+
+@dataclasses.dataclass(frozen=True)
 class EvaluationConfig:
   trial_variation: tuple[float, float, float]  # evaluation scenes' start jitter (SceneConfig.start_jitter)
   held_out: tuple[HeldOutScene, ...]  # stair tasks: fixed staircases of the evaluation suite
   held_out_terrain: tuple[HeldOutTerrain, ...]  # terrain tasks: fixed terrains of the kinds they draw
+  held_out_nav: tuple[HeldOutNav, ...]  # nav tasks: areas with narrower gaps or denser floor obstacles
 
   def validate(self, key: str) -> None:
     validate_jitter(self.trial_variation, f"{key}.trial_variation")
-    for field in ("held_out", "held_out_terrain"):
+    for field in ("held_out", "held_out_terrain", "held_out_nav"):
       names = [h.name for h in getattr(self, field)]
       require(len(set(names)) == len(names), f"{key}.{field}", f"names repeat: {names}")
       for i, h in enumerate(getattr(self, field)):
@@ -370,6 +399,11 @@ class TaskConfig:
             lambda: f"{self.reward.kind!r} penalizes {signal}, which {self.scene.kind} scenes do not measure "
                     f"(they measure {list(kind.signals)}); use one of "
                     f"{[k for k, s in REWARD_SIGNALS.items() if s is None or s in kind.signals]}")
+    require(self.episode.distance in kind.distances, "episode.distance",
+            lambda: f"{self.scene.kind} scenes measure {list(kind.distances)}, not {self.episode.distance!r}")
+    require("collision" in kind.signals or not (self.episode.end_on_collision or self.reward.collision_penalty),
+            "episode.end_on_collision" if self.episode.end_on_collision else "reward.collision_penalty",
+            lambda: f"{self.scene.kind} scenes have nothing to collide with (collisions: nav scenes)")
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
 
@@ -513,7 +547,13 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("reward", "safety_form"): "window",  # before safety forms: the paper's window
               ("reward", "goal_bonus"): 0.0,  # before the goal term: none
               ("evaluation", "trial_variation"): FROM_DEFAULTS,  # evaluation only: old runs are evaluated as today's
-              ("evaluation", "held_out_terrain"): FROM_DEFAULTS}  # evaluation only: old runs get today's
+              ("evaluation", "held_out_terrain"): FROM_DEFAULTS,  # evaluation only: old runs get today's
+              ("evaluation", "held_out_nav"): FROM_DEFAULTS,  # evaluation only: old runs get today's
+              ("scene", "nav_gap"): [1.0, 2.0],  # before the gap setting: the original's U(1, 2) m
+              ("reward", "progress_form"): "closest",  # before potential shaping: the paper's closest distance
+              ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
+              ("episode", "distance"): "euclidean",  # before free-space distances: straight lines
+              ("episode", "end_on_collision"): False}  # before collision safety: collisions go on
 
 
 def _with_added_keys(raw: dict) -> dict:

@@ -15,6 +15,12 @@ policy that hurries pays less); `episode_mean`, scale * K * (M_t - M_{t-1}) with
 episode's first t samples, whose sum over an episode is scale * K * the episode's mean sample: the
 very figure evaluation reports, whatever the episode's length. K = 1, or with normalize_penalties
 the original's K = 1 / mean per-episode penalty sum of the first N episodes (no penalty during those N).
+Progress (reward.progress_form potential): (previous dist - dist) / d0 every step, negative when the
+robot moves away: potential-based shaping, whose episode sum (d0 - final dist) / d0 is the same
+for every path, so a detour costs nothing once undone. With episode.distance geodesic, dist is the
+free-space path length around obstacles (scenes.geodesic) instead of the straight line.
+Collision: a step whose physics touched a wall or obstacle costs collision_penalty and, with
+episode.end_on_collision, ends the episode.
 Goal: reaching the goal earns goal_bonus once (it ends the episode): with a length-neutral safety
 penalty, the only thing that makes running out of time cost more than the last metres of progress.
 Tip-over: |roll| or |pitch| > pi/2 costs tipover_penalty and ends the episode. The episode also
@@ -49,9 +55,13 @@ def goal_reached(dist: jax.Array) -> jax.Array:
   return dist < 0.0
 
 
-def progress_step(dist: jax.Array, closest: jax.Array, d0: jax.Array) -> tuple[jax.Array, jax.Array]:
-  """(progress reward, new closest distance); distances below 0 (goal reached) count as 0."""
+def progress_step(dist: jax.Array, closest: jax.Array, d0: jax.Array,
+                  form: str = "closest") -> tuple[jax.Array, jax.Array]:
+  """(progress reward, new reference distance); distances below 0 (goal reached) count as 0.
+  closest: the closest distance so far, or (form potential) the previous step's distance."""
   dist = jnp.maximum(dist, 0.0)
+  if form == "potential":
+    return (closest - dist) / jnp.maximum(d0, 1e-6), dist
   gain = jnp.maximum(closest - dist, 0.0) / jnp.maximum(d0, 1e-6)
   return gain, jnp.minimum(closest, dist)
 
@@ -123,9 +133,10 @@ class Monitor:
     before = (signal_sum - window[0]) / jnp.maximum(steps - 1, 1)  # window[0]: this step's sample
     return signal_sum / steps - jnp.where(steps > 1, before, 0.0)
 
-  def evaluate(self, dist, closest, d0, rpy, rate: jax.Array, k: jax.Array):
-    """Reward terms, new closest, terminated flag, flags dict for one step; rate: safety_rate(...)."""
-    progress, closest = progress_step(dist, closest, d0)
+  def evaluate(self, dist, closest, d0, rpy, rate: jax.Array, k: jax.Array, collided: jax.Array):
+    """Reward terms, new closest, terminated flag, flags dict for one step; rate: safety_rate(...);
+    collided: whether the step's physics touched a wall or obstacle (mjx_tracks.sim.collisions)."""
+    progress, closest = progress_step(dist, closest, d0, self.reward.progress_form)
     tipped = tipped_over(rpy)
     reached = goal_reached(dist)
     away = dist > self.episode.away_factor * d0
@@ -134,5 +145,7 @@ class Monitor:
         "safety": -self.safety_scale() * k * rate,
         "tipover": -self.reward.tipover_penalty * tipped.astype(jnp.float32),
         "goal": self.reward.goal_bonus * reached.astype(jnp.float32),
+        "collision": -self.reward.collision_penalty * collided.astype(jnp.float32),
     }
-    return terms, progress, closest, tipped | reached | away, {"tipped": tipped, "reached": reached, "away": away}
+    ends = tipped | reached | away | (collided & self.episode.end_on_collision)
+    return terms, progress, closest, ends, {"tipped": tipped, "reached": reached, "away": away, "collided": collided}

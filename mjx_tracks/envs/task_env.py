@@ -21,6 +21,7 @@ from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, norma
 from mjx_tracks.metrics import STEP_NAMES as METRICS  # the per-step metrics (mjx_tracks.metrics.STEP)
 from mjx_tracks.robots import get_robot
 from mjx_tracks.sim import mjx_private
+from mjx_tracks.sim.collisions import CollisionWatch
 from mjx_tracks.sim.control import Controller
 from mjx_tracks.sim.pose import chassis_rpy
 from mjx_tracks.sim.simulator import Simulator
@@ -40,12 +41,13 @@ class EnvState:
   scene: SceneState
   targets: jax.Array  # (n_joints,) rad, joint servo targets
   d0: jax.Array  # () m, starting goal distance (minus tolerance)
-  closest: jax.Array  # () m, closest goal distance so far
+  closest: jax.Array  # () m, closest goal distance so far (reward.progress_form potential: the last one)
   window: jax.Array  # (safety_window,) last raw safety samples, newest first
   signal_sum: jax.Array  # () raw safety samples summed over the episode
   steps: jax.Array  # () int32 control steps taken in the episode
   penalty_sum: jax.Array  # () raw safety penalty summed over the episode
   penalty_k: jax.Array  # () global penalty normalization K
+  collided: jax.Array  # () bool, the robot touched a wall or obstacle earlier in the episode
   key: jax.Array
 
 
@@ -68,6 +70,7 @@ class TrackedRobotEnv(Env):
     self.kind = scene_kind(cfg.scene.kind)
     self.scene = self.kind.make(cfg.scene)
     self.sim = Simulator.create(self.robot, self.scene.world_xml(), cfg.physics)
+    self.watch = CollisionWatch.create(self.sim.mj_model, self.sim.layout, *self.kind.collision_geoms(self.scene))
     self.substeps = int(round(cfg.control.period / cfg.physics.timestep))
     o = cfg.observation
     self.beams = BeamLayout.create(
@@ -100,7 +103,11 @@ class TrackedRobotEnv(Env):
     es: EnvState = state.pipeline_state
     m = self.sim.with_boxes(es.scene.box_pos, es.scene.box_size, es.scene.box_yaw)
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
-    data = self.sim.advance(m, es.data, self.controller.belt_speeds(v, w), targets, self.substeps)
+    belts = self.controller.belt_speeds(v, w)
+    if self.watch.active:
+      data, collided = self.sim.advance_watching(m, es.data, belts, targets, self.substeps, self.watch)
+    else:
+      data, collided = self.sim.advance(m, es.data, belts, targets, self.substeps), jnp.bool_(False)
     data = self._sense(m, data)
     # a physics blow-up ends the episode and keeps the last finite state
     finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
@@ -108,7 +115,8 @@ class TrackedRobotEnv(Env):
 
     pos = data.xpos[self.sim.layout.chassis_body]
     rpy = chassis_rpy(data.qpos)
-    dist = goal_distance(pos, es.scene.goal, es.scene.goal_halfwidth, self.cfg.episode.goal_tolerance)
+    dist = self._distance(pos, es.scene)
+    collided = collided & finite
     cog, on_stairs = self._cog(data, es.scene)
     pitch_rate = jnp.abs(data.qvel[4])  # rad/s, chassis-frame pitch rate
     sample = self.monitor.safety_sample(cog, pitch_rate)
@@ -116,13 +124,15 @@ class TrackedRobotEnv(Env):
     signal_sum, steps = es.signal_sum + sample, es.steps + 1
     rate = self.monitor.safety_rate(window, signal_sum, steps)
     terms, progress, closest, terminated, flags = self.monitor.evaluate(
-        dist, es.closest, es.d0, rpy, rate, es.penalty_k)
+        dist, es.closest, es.d0, rpy, rate, es.penalty_k, collided)
     terms = {k: jnp.where(finite, t, 0.0) for k, t in terms.items()}
     terminated = terminated | ~finite
     key, k_obs = jax.random.split(es.key)
     es = es.replace(data=data, targets=targets, closest=closest, window=window, key=key, signal_sum=signal_sum,
-                    steps=steps, penalty_sum=es.penalty_sum + self.monitor.safety_scale() * rate)
+                    steps=steps, penalty_sum=es.penalty_sum + self.monitor.safety_scale() * rate,
+                    collided=es.collided | collided)
     # keys stay those of reset (wrappers may add their own): update values in place
+    flags = {**flags, "first_collision": collided & ~state.pipeline_state.collided}
     metrics = {**state.metrics,
                **self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)}
     reward = sum(terms.values())
@@ -137,12 +147,11 @@ class TrackedRobotEnv(Env):
     m = self.sim.with_boxes(scene.box_pos, scene.box_size, scene.box_yaw)
     spawn, yaw, joints = self._start(scene, jax.random.fold_in(k_scene, 1))
     data = self._sense(m, self.sim.init_data(spawn, yaw, joints))
-    d0 = goal_distance(data.xpos[self.sim.layout.chassis_body], scene.goal, scene.goal_halfwidth,
-                       self.cfg.episode.goal_tolerance)
+    d0 = self._distance(data.xpos[self.sim.layout.chassis_body], scene)
     es = EnvState(data=data, scene=scene, targets=joints, d0=d0, closest=d0,
                   window=jnp.zeros(self.cfg.reward.safety_window), signal_sum=jnp.float32(0.0),
                   steps=jnp.int32(0), penalty_sum=jnp.float32(0.0),
-                  penalty_k=jnp.asarray(penalty_k, jnp.float32), key=k_next)
+                  penalty_k=jnp.asarray(penalty_k, jnp.float32), collided=jnp.bool_(False), key=k_next)
     zero = jnp.float32(0.0)
     metrics = {k: zero for k in METRICS}
     return State(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=zero, done=zero,
@@ -164,6 +173,15 @@ class TrackedRobotEnv(Env):
     lim = jnp.asarray(self.controller.joint_limits, jnp.float32)
     joints = jnp.clip(jax.random.uniform(k_joint, (nj,), minval=-a_joint, maxval=a_joint), lim[:, 0], lim[:, 1])
     return spawn, yaw, joints
+
+  def _distance(self, pos: jax.Array, scene: SceneState) -> jax.Array:
+    """The goal distance (m) minus the tolerance: straight, or (episode.distance geodesic) along the
+    free-space path, straight where no such path exists (e.g. the robot pushed into an obstacle)."""
+    straight = goal_distance(pos, scene.goal, scene.goal_halfwidth, self.cfg.episode.goal_tolerance)
+    if self.cfg.episode.distance == "euclidean":
+      return straight
+    path = self.scene.free_space_distance(scene, pos) - self.cfg.episode.goal_tolerance
+    return jnp.where(jnp.isfinite(path), path, straight)
 
   # --- sensors ------------------------------------------------------------------------------
   def _sense(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:
@@ -200,7 +218,8 @@ class TrackedRobotEnv(Env):
     out = {f"reward/{k}": f(v) for k, v in terms.items()}
     out.update(progress=f(progress), cog_deviation=f(cog), on_stairs=f(on_stairs),
                pitch_rate=f(pitch_rate), tipped_over=f(flags["tipped"]),
-               goal_reached=f(flags["reached"]), moved_away=f(flags["away"]), physics_nan=f(nan))
+               goal_reached=f(flags["reached"]), moved_away=f(flags["away"]), physics_nan=f(nan),
+               collision=f(flags["first_collision"]))
     assert tuple(out) == METRICS
     return out
 

@@ -12,6 +12,7 @@ import numpy as np
 from mujoco import mjx
 
 from mjx_tracks.sim import mjx_private
+from mjx_tracks.sim.collisions import CollisionWatch
 from mjx_tracks.sim.layout import Layout, resolve_layout
 from mjx_tracks.sim.physics import PhysicsConfig, compile_model
 from mjx_tracks.robots.spec import RobotSpec
@@ -70,6 +71,11 @@ class Simulator:
     mj = copy.copy(self.mj_model)
     ids = self.layout.scene_boxes
     mj.geom_pos[ids], mj.geom_size[ids] = np.asarray(box_pos), np.asarray(box_size)
+    # the C engine's collision reads bounding spheres and boxes compiled for the boxes' old places:
+    # resize them, and skip the world body's compiled bounding-volume tree (its midphase)
+    mj.geom_rbound[ids] = np.linalg.norm(np.asarray(box_size), axis=-1)
+    mj.geom_aabb[ids] = np.concatenate([np.zeros_like(np.asarray(box_size)), np.asarray(box_size)], axis=-1)
+    mj.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_MIDPHASE
     if box_yaw is not None:
       mj.geom_quat[ids] = np.asarray(yaw_quat(jnp.asarray(box_yaw)))
       mj.geom_sameframe[ids] = mujoco.mjtSameFrame.mjSAMEFRAME_NONE  # else the compiled "same rotation as the body" wins
@@ -94,6 +100,15 @@ class Simulator:
     """Sets the joint servo targets (rad), then runs n_substeps physics steps."""
     d = d.replace(ctrl=joint_targets)
     return jax.lax.fori_loop(0, n_substeps, lambda _, x: self.substep(m, x, belt_speeds), d)
+
+  def advance_watching(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, joint_targets: jax.Array,
+                       n_substeps: int, watch: CollisionWatch) -> tuple[mjx.Data, jax.Array]:
+    """advance(), and whether any of its substeps' contacts was a collision (watch.touching)."""
+    def substep(_, carry):
+      x, hit = carry
+      x = self.substep(m, x, belt_speeds)
+      return x, hit | watch.touching(x)
+    return jax.lax.fori_loop(0, n_substeps, substep, (d.replace(ctrl=joint_targets), jnp.bool_(False)))
 
   def plain_step(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:
     """mjx.step without the track model (benchmark baseline)."""

@@ -30,8 +30,14 @@ class SceneKind:
   name: str = ""
   camera: str = "follow"  # mjx_tracks.tools.render: "follow" (behind the robot) | "overhead"
   signals: tuple[str, ...] = ("pitch_rate",)  # safety signals its scenes measure (metrics names)
+  distances: tuple[str, ...] = ("euclidean",)  # goal distances it measures (episode.distance; config.DISTANCES)
   parameters: str = ""  # one line for the README / dashboard: what its xi holds
   stair_script: bool = False  # whether the stair script (the `scripted` baseline, mjx_tracks.baselines) fits it
+
+  def collision_geoms(self, scene) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Geom names of its world that (any part of the robot, any part but a track belt) must not
+    touch: a contact counts as a collision (the `collision` metric). scene: its generator (make())."""
+    return (), ()
 
   def has_hardest(self, s: SceneConfig) -> bool:
     """Whether its scenes have a hardest configuration (every parameter at its hard end)."""

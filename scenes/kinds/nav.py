@@ -10,6 +10,8 @@ from scenes.navigation import NAV_AREAS
 class Nav(SceneKind):
   name = "nav"
   camera = "overhead"
+  signals = ("pitch_rate", "collision")
+  distances = ("euclidean", "geodesic")
   parameters = "scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height"
 
   def validate(self, cfg) -> None:
@@ -24,11 +26,12 @@ class Nav(SceneKind):
   def make(self, s):
     from scenes.navigation import NavScene  # noqa: PLC0415
     return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,
-                    s.nav_floor_height)
+                    s.nav_floor_height, s.nav_gap)
 
   def suite(self, cfg) -> list[str]:
     areas = cfg.scene.nav_kinds
-    return ["uniform", *((NAV + a for a in areas) if len(areas) > 1 else ())]
+    return ["uniform", *((NAV + a for a in areas) if len(areas) > 1 else ()),
+            *(HELD_OUT + h.name for h in cfg.evaluation.held_out_nav)]
 
   def pinned(self, cfg, scene: str):
     from mjx_tracks.envs.config import ConfigError  # noqa: PLC0415
@@ -37,10 +40,19 @@ class Nav(SceneKind):
       if area not in cfg.scene.nav_kinds:
         raise ConfigError(f"scene {scene!r}: the task draws navigation areas {list(cfg.scene.nav_kinds)}")
       return replace_scene(cfg, nav_kinds=(area,))
-    if scene == "hardest" or scene.startswith((HARDEST, HELD_OUT)):
-      raise ConfigError(f"scene {scene!r}: navigation tasks have no hardest or held-out configuration; "
-                        f"use uniform or {NAV}AREA")
+    if scene.startswith(HELD_OUT):
+      held = {h.name: h for h in cfg.evaluation.held_out_nav}
+      h = held.get(scene[len(HELD_OUT):])
+      if h is None:
+        raise ConfigError(f"scene {scene!r}: the task's held-out areas (evaluation.held_out_nav) are {list(held)}")
+      return replace_scene(cfg, nav_gap=tuple(h.gap), nav_floor_obstacles=h.floor_obstacles)
+    if scene == "hardest" or scene.startswith(HARDEST):
+      raise ConfigError(f"scene {scene!r}: navigation tasks have no hardest configuration; "
+                        f"use uniform, {NAV}AREA or {HELD_OUT}NAME")
     return None
+
+  def collision_geoms(self, scene):
+    return scene.collision_geoms()
 
   def groups(self, s) -> tuple[str, ...]:
     return tuple(s.nav_kinds)

@@ -30,7 +30,8 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
   if any(f"{prefix}{k}" not in m for k in STEP_NAMES):
     return {"return_mean": ret}
   fig = episode_figures({k: m[f"{prefix}{k}"] for k in STEP_NAMES}, length if length else 1.0)
-  fig.update(success=m[f"{prefix}goal_reached"], tipped_over=m[f"{prefix}tipped_over"])  # rates: means of 0/1 sums
+  fig.update(success=m[f"{prefix}goal_reached"], tipped_over=m[f"{prefix}tipped_over"],  # rates: means of 0/1 sums
+             collided=m[f"{prefix}collision"])
   out = {"return_mean": ret, **{c: fig[n] for n, c in REPORT_COLUMN.items() if n != "pitch_rate" or length}}
   return {k: float(v) for k, v in out.items()}
 

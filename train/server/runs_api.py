@@ -59,6 +59,12 @@ def get_stats(run_id: str, request: Request, source: str | None = None) -> list[
   return [r for r in rows if source is None or r["source"] == source]
 
 
+def _mean(values) -> float | None:
+  """The mean of the recorded values; None where none was (a figure added after the trials ran)."""
+  kept = [v for v in values if v is not None]
+  return sum(kept) / len(kept) if kept else None
+
+
 @router.get("/{run_id}/evals")
 def get_evals(run_id: str, request: Request) -> list[dict]:
   """Its evaluations, one entry per (scene, budget): the mean of each figure and every trial."""
@@ -67,7 +73,7 @@ def get_evals(run_id: str, request: Request) -> list[dict]:
   groups = db.eval_groups(run_id)
   figures = EPISODE_NAMES
   return [{"scene": scene, "budget": budget, "trials": len(rows),
-           "mean": {k: sum(r[k] for r in rows) / len(rows) for k in figures},
+           "mean": {k: _mean(r[k] for r in rows) for k in figures},
            "per_trial": [{k: r[k] for k in ("trial", *figures)} for r in rows]}
           for (scene, budget), rows in groups.items()]
 

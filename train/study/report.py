@@ -61,16 +61,17 @@ def final_table(results: StudyResults) -> list[str]:
 
 def suite_table(results: StudyResults) -> list[str]:
   """One row per (group, task, budget, scene) of the suite's other scenes (held-out staircases and
-  terrains, each terrain kind's hardest, each navigation area): runs, success and progress IQM [95 % CI]."""
-  lines = ["| group | task | budget | scene | runs | success | progress |", "|---" * 7 + "|"]
+  terrains, each terrain kind's hardest, each navigation area): runs, success, progress and the rate
+  of trials with a collision (nav scenes), IQM [95 % CI]."""
+  lines = ["| group | task | budget | scene | runs | success | progress | collisions |", "|---" * 8 + "|"]
   others = [s for s in results.scenes() if s not in ("hardest", "uniform")]
   for group, task, budget in results.groups():
     for scene in others:
-      fig = {m: results.final(group, task, budget, scene, m) for m in ("success", "progress")}
+      fig = {m: results.final(group, task, budget, scene, m) for m in ("success", "progress", "collided")}
       if len(fig["success"]):
         est = iqm_intervals(fig)
         lines.append(f"| {group} | {task} | {budget_text(budget)} | {scene} | {len(fig['success'])} | "
-                     f"{ci_text(est.get('success'))} | {ci_text(est.get('progress'))} |")
+                     f"{ci_text(est.get('success'))} | {ci_text(est.get('progress'))} | {ci_text(est.get('collided'))} |")
   return lines if len(lines) > 2 else []
 
 

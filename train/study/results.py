@@ -68,7 +68,8 @@ class StudyResults:
     for r in self.runs:
       if (r.cell.group, r.cell.task) != (group, task) or budget not in r.cell.budgets():
         continue
-      trials = [e[metric] for e in r.evals if e["scene"] == scene and (e["budget"] or r.cell.steps) == budget]
+      trials = [e[metric] for e in r.evals if e["scene"] == scene and (e["budget"] or r.cell.steps) == budget
+                and e.get(metric) is not None]  # None: a figure added after the trials ran
       if trials:
         out.append(float(np.mean(trials)))
     return np.asarray(out)

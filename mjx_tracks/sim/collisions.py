@@ -1,0 +1,61 @@
+"""Collision watch: whether the robot touches what it must not (walls, obstacles) in a physics step.
+
+A contact counts when its geoms penetrate (dist - includemargin < 0, the contacts the solver acts
+on) and one of them is a robot geom (a body other than the world) while the other is
+- a `forbidden` world geom (walls, wall obstacles): any part of the robot, belts included, or
+- a `belts_only` world geom (floor obstacles, driven over on the belts): any robot geom but a belt.
+The scene kind names both sets (scenes.kinds: SceneKind.collision_geoms).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+
+from mjx_tracks.sim import mjx_private
+from mjx_tracks.sim.layout import Layout
+
+
+@dataclasses.dataclass(frozen=True)
+class CollisionWatch:
+  """Per-geom masks of one compiled model (numpy, resolved once)."""
+
+  forbidden: np.ndarray  # (ngeom,) bool: no robot geom may touch it
+  belts_only: np.ndarray  # (ngeom,) bool: only belt geoms may touch it
+  robot: np.ndarray  # (ngeom,) bool: the robot's geoms
+  belt: np.ndarray  # (ngeom,) bool: track belt geoms
+
+  @staticmethod
+  def create(m: mujoco.MjModel, layout: Layout, forbidden: tuple[str, ...],
+             belts_only: tuple[str, ...]) -> "CollisionWatch":
+    def mask(names):
+      out = np.zeros(m.ngeom, bool)
+      for n in names:
+        g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)
+        if g < 0:
+          raise KeyError(f"model has no geom named {n!r}")
+        out[g] = True
+      return out
+    return CollisionWatch(mask(forbidden), mask(belts_only), np.asarray(m.geom_bodyid) > 0, layout.geom_belt >= 0)
+
+  @property
+  def active(self) -> bool:
+    """Whether anything is watched (else touching() is always False)."""
+    return bool(self.forbidden.any() or self.belts_only.any())
+
+  def touching(self, d) -> jax.Array:
+    """() bool: whether a contact of the step just taken is a collision (module docstring)."""
+    c = mjx_private.contacts(d)
+    g1, g2 = c.geom[:, 0], c.geom[:, 1]
+    robot, belt = jnp.asarray(self.robot), jnp.asarray(self.belt)
+    forbidden, belts_only = jnp.asarray(self.forbidden), jnp.asarray(self.belts_only)
+
+    def hits(world, part):
+      return robot[part] & (forbidden[world] | (belts_only[world] & ~belt[part]))
+
+    penetrating = c.dist - c.includemargin < 0
+    return jnp.any(penetrating & (hits(g1, g2) | hits(g2, g1)))

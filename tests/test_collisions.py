@@ -1,0 +1,90 @@
+"""Collision watch (mjx_tracks.sim.collisions) against the MuJoCo C engine's contacts, in the
+navigation world: the robot against a wall obstacle (any part counts), over a floor obstacle on its
+belts (does not count) and with its belly on one (counts)."""
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from mujoco import mjx
+
+import mjx_tracks
+from scenes.navigation import AREA_W
+
+ROBOT_Y = 0.0  # m; the robot stands at x = 6 m, heading +x (unless a case moves it along y)
+HIDDEN = ([-20.0, 0.0, -5.0], [0.1, 0.1, 0.1])  # a box out of the way (m)
+
+
+def _c_collision(watch, m: mujoco.MjModel, d: mujoco.MjData) -> bool:
+  """The rule of the module docstring, read off the C engine's contact list in plain Python."""
+  for k in range(d.ncon):
+    c = d.contact[k]
+    if c.dist - c.includemargin >= 0:
+      continue
+    for world, part in ((c.geom1, c.geom2), (c.geom2, c.geom1)):
+      if m.geom_bodyid[part] > 0 and (watch.forbidden[world] or (watch.belts_only[world] and not watch.belt[part])):
+        return True
+  return False
+
+
+def _poses():
+  """(name, expected collision, boxes (centres, half-sizes), the robot's y (m))."""
+  wall = lambda gap: ([6.0, ROBOT_Y + 0.405 + gap + 0.5, 0.5], [1.0, 0.5, 0.5])  # wall obstacle's face gap m beyond y = 0.405 (flippers: pivot 0.315 + radius 0.09)
+  floor = lambda y, h: ([6.0, y, h / 2], [0.08, 0.06, h / 2])  # a floor obstacle (box 2) under the robot
+  cases = [(f"wall obstacle, face {g:+.2f} m beyond the flippers' side", g < 0, [wall(g), HIDDEN, HIDDEN], ROBOT_Y)
+           for g in (-0.1, -0.04, 0.03, 0.1)]
+  cases += [("floor obstacle under the left track", False, [HIDDEN, HIDDEN, floor(0.3, 0.03)], ROBOT_Y),
+            ("floor obstacle under the belly", True, [HIDDEN, HIDDEN, floor(0.0, 0.09)], ROBOT_Y),
+            ("floor obstacle the belly clears (its bottom: 0.055 m)", False, [HIDDEN, HIDDEN, floor(0.0, 0.04)], ROBOT_Y),
+            ("left wall plane 0.03 m inside the flippers", True, [HIDDEN] * 3, AREA_W / 2 - 0.405 + 0.03),
+            ("left wall plane 0.03 m beyond the flippers", False, [HIDDEN] * 3, AREA_W / 2 - 0.405 - 0.03)]
+  return cases
+
+
+@functools.lru_cache(maxsize=None)
+def _watched():
+  """(env, jitted flag(qpos, box centres, box half-sizes) per robot): one program for every test."""
+  env = mjx_tracks.load("nav-obstacles", ["scene.nav_floor_obstacles=1"])
+
+  def flag(q, p, s):
+    m = env.sim.with_boxes(p, s)
+    d = mjx.make_data(m, impl="jax").replace(qpos=q)
+    return env.watch.touching(mjx.forward(m, d))
+
+  return env, jax.jit(jax.vmap(flag))
+
+
+def test_collision_flag_matches_the_c_engine_contacts_and_the_rule():
+  env, flags = _watched()
+  sim, watch = env.sim, env.watch
+  assert watch.forbidden.sum() == 6 and watch.belts_only.sum() == 1  # 4 walls + 2 obstacles; 1 floor obstacle
+  cases = _poses()
+  qpos = []
+  for _, _, boxes, y in cases:
+    qpos.append(np.asarray(sim.init_data(jnp.array([6.0, y, 0.0]), jnp.float32(0.0)).qpos))
+  pos = jnp.array([[b[0] for b in boxes] for _, _, boxes, _ in cases])
+  size = jnp.array([[b[1] for b in boxes] for _, _, boxes, _ in cases])
+  got = np.asarray(flags(jnp.asarray(np.stack(qpos)), pos, size))
+  for (name, expected, boxes, _), q, g in zip(cases, qpos, got):
+    m = sim.c_model_with_boxes(np.array([b[0] for b in boxes]), np.array([b[1] for b in boxes]))
+    d = mujoco.MjData(m)
+    d.qpos[:] = q
+    mujoco.mj_forward(m, d)
+    assert bool(g) == _c_collision(watch, m, d) == expected, name
+
+
+def test_stair_and_terrain_worlds_watch_nothing():
+  for task in ("asc-inc-cog", "step-up"):
+    assert not mjx_tracks.load(task).watch.active
+
+
+
+def test_no_random_spawn_starts_touching_a_wall_or_obstacle():
+  env, flags = _watched()
+  n = len(_poses())  # the other test's batch: the same program
+  scenes = jax.vmap(env.scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(3), 64 * n), 1.0)
+  qpos = jax.vmap(lambda p, y: env.sim.init_data(p, y).qpos)(scenes.spawn_pos, scenes.spawn_yaw)
+  hits = [np.asarray(flags(qpos[k:k + n], scenes.box_pos[k:k + n], scenes.box_size[k:k + n])) for k in range(0, 64 * n, n)]
+  assert not np.concatenate(hits).any()
