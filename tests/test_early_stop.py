@@ -24,8 +24,7 @@ def test_criteria_parse_with_their_defaults_and_name_bad_input():
                       ("success=0.9x0", "count of reports in a row"), ("success=0.9xa", "count of reports")):
     with pytest.raises(ValueError, match=words):
       parse_early_stop(text, up)
-  with pytest.raises(ValueError, match="no hardest configuration"):
-    parse_early_stop("success", nav)
+  assert parse_early_stop("success=0.9", nav) == EarlyStop("success", 0.9, 2)  # on random areas (its probe scene)
   with pytest.raises(ValueError, match="no paper threshold"):
     parse_early_stop("return", nav)
 
@@ -37,8 +36,8 @@ class FakeReporter:
     self.rows = []
 
   def __call__(self, step, metrics):
-    source = "hardest" if "hardest/success_rate" in metrics else "train"
-    row = {"step": step, "source": source, "success_rate": metrics.get("hardest/success_rate"),
+    source = "probe" if "probe/success_rate" in metrics else "train"
+    row = {"step": step, "source": source, "success_rate": metrics.get("probe/success_rate"),
            "return_mean": metrics.get("episode/sum_reward"), "steps_per_s": metrics.get("training/steps_per_s")}
     self.rows.append(row)
     return row
@@ -50,7 +49,7 @@ def _loop(probe_success, early, probe_every=300):
   update = lambda s: (s + 1, {"episode/sum_reward": 0.1, "episode/count": 1.0})
   ckpt = Checkpointer(None, {}, None, lambda step: None, every_s=1e9)
   reporter = FakeReporter()
-  probe = lambda s: {"hardest/success_rate": next(successes)}  # noqa: E731
+  probe = lambda s: {"probe/success_rate": next(successes)}  # noqa: E731
   loop = Loop(update, 100, ckpt, reporter, types.SimpleNamespace(requested=None),
               Schedule(100, early, ((probe, probe_every),)))
   return loop, reporter
@@ -60,7 +59,7 @@ def test_the_loop_stops_at_the_first_probe_reaching_the_success_threshold():
   loop, reporter = _loop([0.5, 0.96, 0.98, 1.0], EarlyStop("success", 0.97))
   result = loop.run(0, 0, 10_000)
   assert result.reason == "early_stop" and result.step == 900 and result.state == 9
-  assert [r["step"] for r in reporter.rows if r["source"] == "hardest"] == [300, 600, 900]
+  assert [r["step"] for r in reporter.rows if r["source"] == "probe"] == [300, 600, 900]
 
 
 def test_a_criterion_of_two_in_a_row_waits_for_two_probes_in_a_row():
@@ -95,7 +94,7 @@ def test_time_of_updates_still_running_when_an_evaluation_starts_counts_as_train
   update = lambda s: (DispatchedState(), {"episode/sum_reward": 0.1, "episode/count": 1.0})
   ckpt = Checkpointer(None, {}, None, lambda step: None, every_s=1e9)
   reporter = FakeReporter()
-  probe = lambda s: (s.block_until_ready(), {"hardest/success_rate": 0.0})[1]  # waits like an evaluation
+  probe = lambda s: (s.block_until_ready(), {"probe/success_rate": 0.0})[1]  # waits like an evaluation
   loop = Loop(update, 100, ckpt, reporter, types.SimpleNamespace(requested=None), Schedule(200, None, ((probe, 100),)))
   loop.run(DispatchedState(), 0, 1_000)
   rates = [r["steps_per_s"] for r in reporter.rows if r["source"] == "train"]
@@ -107,7 +106,7 @@ def test_time_of_updates_still_running_when_an_evaluation_starts_counts_as_train
     (["--task", "asc-inc-cog", "--preset", "gpu"], "success=0.97x2"),  # the GPU main command stops once solved
     (["--task", "asc-inc-cog", "--preset", "gpu", "--early-stop", "none"], None),
     (["--task", "asc-inc-cog", "--preset", "gpu", "--early-stop", "return"], "return=0.5"),
-    (["--task", "nav", "--preset", "gpu"], None),  # no hardest scene to be solved on
+    (["--task", "nav", "--preset", "gpu"], "success=0.97x2"),  # solved on random areas, its probe scene
     (["--task", "asc-inc-cog", "--preset", "laptop"], None),
     (["--task", "des-inc-ang", "--algo", "sac", "--preset", "paper"], None)])
 def test_the_preset_says_when_a_run_stops_unless_the_command_line_does(argv, expected, tmp_path):

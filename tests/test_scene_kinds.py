@@ -84,3 +84,9 @@ def test_held_out_navigation_areas_narrow_the_gap_or_add_obstacles_and_stay_pass
     load_config("nav", ["evaluation.held_out_nav=[{name: slit, gap: [0.5, 0.5], floor_obstacles: 0}]"])
   with pytest.raises(ConfigError, match="held-out areas"):
     kind.pinned(cfg, "held-out/middle")
+
+
+def test_each_kind_names_the_scene_its_probes_and_success_early_stops_run_on():
+  from scenes.kinds.base import SceneKind
+  assert [load_config(t).scene.probe_scene for t in ("asc-inc-cog", "mixed-terrain", "nav")] == ["hardest", "hardest", "uniform"]
+  assert SceneKind().probe_scene(load_config("nav").scene) is None  # a kind with no hardest configuration: no probe

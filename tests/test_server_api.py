@@ -30,7 +30,7 @@ def served(tmp_path):
   for step, ret in ((100, 0.1), (200, 0.2), (300, 0.4)):
     db.log_stats("a", {"step": step, "wall_s": step / 10, "steps_per_s": 50.0 + step, "eps": step / 1000,
                        "return_mean": ret, "success_rate": ret / 2, "source": "train"}, {})
-  db.log_stats("a", {"step": 300, "success_rate": 0.9, "source": "hardest"}, {})
+  db.log_stats("a", {"step": 300, "success_rate": 0.9, "source": "probe"}, {})
   db.log_evals("a", [{"scene": "hardest", "trial": i, "progress": 0.5 + i / 10, "success": i % 2,
                       "cog_deviation": 0.1, "pitch_rate": 0.2, "tipped_over": 0, "length": 10} for i in range(4)])
   db.finish("a", "done", {"step": 300}, 300)

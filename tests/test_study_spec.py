@@ -64,7 +64,6 @@ def test_a_group_of_another_library_plans_its_runs_with_it(tmp_path):
     ({"groups": [{**GROUP, "tasks": ["nav"]}]}, r"groups\[0\].tasks: distinct tasks of the study's tasks"),
     ({"groups": [{**GROUP, "tasks": ["asc-inc-cog"] * 2}]}, r"groups\[0\].tasks: distinct"),
     ({"groups": [{**GROUP, "set": ["reward.cog_scal=1"]}]}, r"groups\[0\] \(ppo\) on asc-inc-cog: reward.cog_scal: unknown key"),
-    ({"tasks": ["nav"], "groups": [{**GROUP, "early_stop": "success"}]}, "nav has no hardest configuration"),
     ({"groups": [{**GROUP, "budgets": "some"}]}, r"groups\[0\].budgets: one of"),
     ({"groups": [{**GROUP, "budgets": "milestones", "early_stop": "return"}]}, "an early stop would cut them short"),
     ({"compare": [["asc-inc-cog", "nav"]]}, r"compare\[0\]: two different tasks of the study"),

@@ -63,7 +63,8 @@ SCHEMA = SCHEMA.format(  # the metric columns: mjx_tracks.metrics
     report_columns=", ".join(f"{c} REAL" for c in REPORT_COLUMN.values()),
     trial_columns=", ".join(f"{m.name} {'INTEGER' if m.integer else 'REAL'}" for m in EPISODE))
 STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", *REPORT_COLUMN.values(), "source")
-STAT_SOURCES = ("train", "eval", "hardest")  # training episodes, Brax's evaluator (uniform scenes), the hardest probe
+STAT_SOURCES = ("train", "eval", "probe")  # training episodes, Brax's evaluator (uniform scenes), train.core.probe
+OLD_SOURCES = {"hardest": "probe"}  # a source's name in databases written before it was renamed
 EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed", "crashed")
 # a run's final status -> the event that records it
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
@@ -105,6 +106,8 @@ class ExperimentDB:
         for name, kind in columns:
           if name not in have:
             c.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
+      for old, new in OLD_SOURCES.items():
+        c.execute("UPDATE stats SET source = ? WHERE source = ?", (new, old))
 
   @contextlib.contextmanager
   def _conn(self) -> Iterator[sqlite3.Connection]:

@@ -219,6 +219,12 @@ class SceneConfig:
     from scenes.kinds import scene_kind  # noqa: PLC0415
     return scene_kind(self.kind).has_hardest(self)
 
+  @property
+  def probe_scene(self) -> str | None:
+    """The scene of in-training probes and `--early-stop success` (SceneKind.probe_scene); None: none."""
+    from scenes.kinds import scene_kind  # noqa: PLC0415
+    return scene_kind(self.kind).probe_scene(self)
+
   def validate(self, key: str) -> None:
     """The keys every kind has; the kind's own checks run in TaskConfig.validate (they may need
     other sections)."""

@@ -43,6 +43,11 @@ class SceneKind:
     """Whether its scenes have a hardest configuration (every parameter at its hard end)."""
     return False
 
+  def probe_scene(self, s: SceneConfig) -> str | None:
+    """The evaluation scene of in-training probes and of `--early-stop success` (train.core.probe):
+    the hardest configuration where its scenes have one; None: no probe."""
+    return "hardest" if self.has_hardest(s) else None
+
   def validate(self, cfg: TaskConfig) -> None:
     """ConfigError (naming the key) for any part of cfg this kind cannot run."""
 

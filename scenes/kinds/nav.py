@@ -51,6 +51,10 @@ class Nav(SceneKind):
                         f"use uniform, {NAV}AREA or {HELD_OUT}NAME")
     return None
 
+  def probe_scene(self, s) -> str:
+    """Random areas of every kind the task draws (no area is harder than another by a parameter)."""
+    return "uniform"
+
   def collision_geoms(self, scene):
     return scene.collision_geoms()
 

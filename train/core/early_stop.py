@@ -1,6 +1,7 @@
 """Early-stop criteria of a run: `return[=X]`, the paper's (mean return of the training episodes
-finished since the last report), or `success[=X]` (success of the hardest-staircase probe,
-train.core.probe, the trials of the final `train.evaluate --scene hardest`), each optionally `xN`:
+finished since the last report), or `success[=X]` (success of the probe on the task's probe scene,
+train.core.probe: the trials of the final `train.evaluate --scene hardest`, or `--scene uniform` for
+navigation), each optionally `xN`:
 met by N reports in a row."""
 
 from __future__ import annotations
@@ -11,12 +12,12 @@ from scenes.kinds import scene_kind
 from train.db import STAT_SOURCES
 
 NO_EARLY_STOP = "none"  # --early-stop none: train every step whatever the preset says
-EARLY_STOP_SUCCESS = 0.97  # success on the hardest staircase
+EARLY_STOP_SUCCESS = 0.97  # success on the probe scene (the hardest staircase)
 # reports in a row that must meet a criterion: two probes for success, since a policy that just
 # reached 0.97 in one probe can score a few trials less in another compilation of the same trials
 EARLY_STOP_TIMES = {"return": 1, "success": 2}
-TRAIN, _, HARDEST = STAT_SOURCES
-CRITERIA = {"return": (TRAIN, "return_mean"), "success": (HARDEST, "success_rate")}  # -> report source, column
+TRAIN, _, PROBE = STAT_SOURCES
+CRITERIA = {"return": (TRAIN, "return_mean"), "success": (PROBE, "success_rate")}  # -> report source, column
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,7 +31,7 @@ class EarlyStop:
 
   @property
   def needs_probe(self) -> bool:
-    return CRITERIA[self.metric][0] == HARDEST
+    return CRITERIA[self.metric][0] == PROBE
 
   def met(self, row: dict) -> bool:
     """Whether a report row (train.core.progress.Reporter) reaches the threshold."""
@@ -75,6 +76,6 @@ def parse_early_stop(text: str, cfg) -> EarlyStop:
       raise ValueError(f"--early-stop return: task {cfg.task} has no paper threshold; give return=X")
   if metric == "success" and not 0.0 <= threshold <= 1.0:
     raise ValueError(f"--early-stop {text}: a success threshold is in [0, 1]")
-  if metric == "success" and not cfg.scene.has_hardest:
-    raise ValueError(f"--early-stop success: task {cfg.task} has no hardest configuration; use return=X")
+  if metric == "success" and cfg.scene.probe_scene is None:
+    raise ValueError(f"--early-stop success: task {cfg.task} has no probe scene; use return=X")
   return EarlyStop(metric, threshold, times)

@@ -219,27 +219,27 @@ def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:
 
 
 def _early_stop(given: str | None, preset, cfg) -> EarlyStop | None:
-  """The criterion given, else the preset's (PPO gpu: success on the hardest scene, for tasks that
+  """The criterion given, else the preset's (PPO gpu: success on the probe scene, for tasks that
   have one); None for 'none'."""
   if given == NO_EARLY_STOP:
     return None
   if given is None:
-    given = preset.early_stop if preset.early_stop and cfg.scene.has_hardest else None
+    given = preset.early_stop if preset.early_stop and cfg.scene.probe_scene else None
   return parse_early_stop(given, cfg) if given else None
 
 
 def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int:
-  """Steps between hardest-configuration probes: as given, else the preset's (stair and terrain tasks); an early
-  stop on success needs them."""
+  """Steps between probes of the task's probe scene (SceneKind.probe_scene): as given, else the preset's
+  (tasks with a probe scene); an early stop on success needs them."""
   if given is not None and given < 0:
     raise RunError("--probe-every must be >= 0 (0: no probe)")
   if given == 0 and early is not None and early.needs_probe:
-    raise RunError(f"--early-stop {early} needs the hardest-staircase probe; drop --probe-every 0")
-  every = given if given is not None else (preset.probe_steps if cfg.scene.has_hardest else 0)
+    raise RunError(f"--early-stop {early} needs the probe; drop --probe-every 0")
+  every = given if given is not None else (preset.probe_steps if cfg.scene.probe_scene else 0)
   if early is not None and early.needs_probe and every == 0:
     every = preset.probe_steps or preset.training_metrics_steps
-  if every and not cfg.scene.has_hardest:
-    raise RunError(f"--probe-every: task {cfg.task} has no hardest configuration to probe")
+  if every and not cfg.scene.probe_scene:
+    raise RunError(f"--probe-every: task {cfg.task} has no probe scene")
   return every
 
 

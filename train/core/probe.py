@@ -1,5 +1,6 @@
-"""The in-training evaluation on the hardest staircase: the very trials of `python -m train.evaluate
-RUN --scene hardest` (the same compiled program: same reset keys, deterministic policy), compiled
+"""The in-training evaluation on the task's probe scene (SceneKind.probe_scene: the hardest staircase or
+terrain; random areas for navigation): the very trials of `python -m train.evaluate RUN --scene
+SCENE` (the same compiled program: same reset keys, deterministic policy), compiled
 once and run between updates on the current parameters, so an early stop on its success is the
 final evaluation's (and the evaluation finds the program in the persistent compilation cache)."""
 
@@ -12,15 +13,15 @@ from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_config, tri
 from train.core.mesh import to_host
 from train.core.policy import act_from_params
 
-PREFIX = "hardest/"  # the probe's metrics: hardest/<report column>
+PREFIX = "probe/"  # the probe's metrics: probe/<report column>
 
 
-class HardestProbe:
-  """probe(state) -> {hardest/<column>: mean over the trials} for a learner state."""
+class Probe:
+  """probe(state) -> {probe/<column>: mean over the trials} for a learner state."""
 
   def __init__(self, t, trials: int = EVAL_TRIALS):
     self._params = t.learner.policy_params
-    self._run = trial_runner(scene_config(t.plan.cfg, "hardest"), act_from_params(t.spec), trials, EVAL_EPS, EVAL_SEED)
+    self._run = trial_runner(scene_config(t.plan.cfg, t.plan.cfg.scene.probe_scene), act_from_params(t.spec), trials, EVAL_EPS, EVAL_SEED)
 
   def __call__(self, state) -> dict[str, float]:
     fig, _, _ = self._run(to_host(self._params(state)))

@@ -36,14 +36,14 @@ def summarize(metrics: dict[str, Any]) -> dict[str, float]:
   return {k: float(v) for k, v in out.items()}
 
 
-TRAIN, EVAL, HARDEST = STAT_SOURCES
-LABELS = {TRAIN: "train", EVAL: "eval ", HARDEST: "hard "}  # a row's source -> its line's tag
+TRAIN, EVAL, PROBE_SOURCE = STAT_SOURCES
+LABELS = {TRAIN: "train", EVAL: "eval ", PROBE_SOURCE: "probe"}  # a row's source -> its line's tag
 
 
 def _source(metrics: dict) -> str:
   """Which kind of report the metrics are."""
   if any(k.startswith(PROBE) for k in metrics):
-    return HARDEST
+    return PROBE_SOURCE
   return EVAL if any(k.startswith("eval/") for k in metrics) else TRAIN
 
 
@@ -59,7 +59,7 @@ class Reporter:
     self.session_t0 = time.time()
     self.t0 = self.session_t0 - wall_offset  # s: a resumed run's wall time continues from its checkpoint
     self.latest: dict[str, float] = {}
-    self.latest_hardest: dict[str, float] = {}
+    self.latest_probe: dict[str, float] = {}
     self.writer = None
     if tb_dir:
       from tensorboardX import SummaryWriter  # noqa: PLC0415
@@ -73,8 +73,8 @@ class Reporter:
     row = {"step": step, "wall_s": now - self.t0, "steps_per_s": sps, "eps": eps, **fig,
            "source": _source(metrics)}
     figures = {k: v for k, v in row.items() if v is not None and k != "source"}
-    if fig and row["source"] == HARDEST:  # the summary's figures: the last probe, and
-      self.latest_hardest = {f"hardest_{k}": v for k, v in fig.items()}
+    if fig and row["source"] == PROBE_SOURCE:  # the summary's figures: the last probe, and
+      self.latest_probe = {f"probe_{k}": v for k, v in fig.items()}
     elif fig:  # the last report or evaluation
       self.latest = figures
     self._print(row)

@@ -16,7 +16,7 @@ from train.evaluation import milestone_folder
 from train.core.loop import Checkpointer, Loop, LoopResult, Schedule
 from train.core.mesh import from_host, to_host
 from train.core.plan import RunError, RunPlan
-from train.core.probe import HardestProbe
+from train.core.probe import Probe
 from train.core.progress import Reporter
 
 
@@ -74,7 +74,7 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) ->
                       stream=sys.stdout if primary else open(os.devnull, "w"),
                       wall_offset=db.wall_offset(plan.run_id, start_step))
   eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
-  probe = HardestProbe(t) if plan.probe_every else None
+  probe = Probe(t) if plan.probe_every else None
   schedule = Schedule(p.training_metrics_steps, plan.early_stop,
                       ((_evaluator(t), eval_every), (probe, plan.probe_every)), plan.milestones,
                       lambda state, step, budget: _export(t, state, step, milestone_folder(budget)))
@@ -114,7 +114,7 @@ def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions
   finally:
     reporter.close()
   return {"step": result.step, "reason": result.reason, "policy": policy_dir, **reporter.latest,
-          **reporter.latest_hardest}
+          **reporter.latest_probe}
 
 
 def device_summary() -> str:

@@ -50,7 +50,7 @@ def get_run(run_id: str, request: Request) -> dict:
 
 @router.get("/{run_id}/stats")
 def get_stats(run_id: str, request: Request, source: str | None = None) -> list[dict]:
-  """Its statistics rows (source: train | eval | hardest; all when not given), by step."""
+  """Its statistics rows (source: train | eval | probe; all when not given), by step."""
   db = db_of(request)
   run_or_404(db, run_id)
   rows = db.stats(run_id)
