@@ -10,8 +10,9 @@ path from p to the goal in such a domain runs straight between the inflated boxe
 
 with D(c) the shortest corner-to-goal distance through the graph (Bellman-Ford from the goal over
 the corners, as many rounds as there are corners). Corners outside the area or inside another box
-are not nodes. A box that contains p (the robot touching an obstacle) is tested without inflation
-for p's own segments, so G stays finite there. Where no path exists, G = inf.
+are not nodes. An inflated box that contains p (the robot close to an obstacle) or the goal (a goal
+within the clearance of an obstacle) is tested without inflation for that point's own segments, so
+G stays finite there. Where no path exists, G = inf.
 """
 
 from __future__ import annotations
@@ -45,6 +46,13 @@ def _corners(lo: jax.Array, hi: jax.Array) -> jax.Array:
                           jnp.stack([hi[:, 0], lo[:, 1]], -1), jnp.stack([hi[:, 0], hi[:, 1]], -1)])
 
 
+def _own_boxes(q: jax.Array, box_lo, box_hi, lo, hi) -> tuple[jax.Array, jax.Array]:
+  """The boxes q's own segments are tested against: an inflated box [lo, hi] that contains q as it
+  is [box_lo, box_hi], not inflated (so a point near an obstacle keeps a finite distance)."""
+  holds = jnp.all((q > lo) & (q < hi), axis=-1)[:, None]
+  return jnp.where(holds, box_lo, lo), jnp.where(holds, box_hi, hi)
+
+
 def geodesic_distance(p: jax.Array, goal: jax.Array, box_lo: jax.Array, box_hi: jax.Array,
                       area_lo: jax.Array, area_hi: jax.Array, clearance: float) -> jax.Array:
   """G(p) (m, module docstring): p, goal (2,); obstacles [box_lo, box_hi] (k, 2) m; the area
@@ -57,12 +65,11 @@ def geodesic_distance(p: jax.Array, goal: jax.Array, box_lo: jax.Array, box_hi: 
   blocked = jax.vmap(lambda a: jax.vmap(lambda b: segment_blocked(a, b, lo, hi))(nodes))(nodes)
   edge = jnp.where(valid[:, None] & valid[None, :] & ~blocked,
                    jnp.linalg.norm(nodes[:, None] - nodes[None, :], axis=-1), jnp.inf)
-  to_goal = jax.vmap(lambda a: segment_blocked(a, goal, lo, hi))(nodes)
+  g_lo, g_hi = _own_boxes(goal, box_lo, box_hi, lo, hi)
+  to_goal = jax.vmap(lambda a: segment_blocked(a, goal, g_lo, g_hi))(nodes)
   d = jnp.where(valid & ~to_goal, jnp.linalg.norm(nodes - goal, axis=-1), jnp.inf)
   d = jax.lax.fori_loop(0, nodes.shape[0], lambda _, d: jnp.minimum(d, jnp.min(edge + d[None, :], axis=1)), d)
-  # p's own segments: a box containing p is tested as it is, not inflated
-  holds_p = jnp.all((p > lo) & (p < hi), axis=-1)[:, None]
-  p_lo, p_hi = jnp.where(holds_p, box_lo, lo), jnp.where(holds_p, box_hi, hi)
+  p_lo, p_hi = _own_boxes(p, box_lo, box_hi, lo, hi)
   direct = jnp.where(segment_blocked(p, goal, p_lo, p_hi), jnp.inf, jnp.linalg.norm(p - goal))
   seen = jax.vmap(lambda c: ~segment_blocked(p, c, p_lo, p_hi))(nodes)
   via = jnp.min(jnp.where(seen & valid, jnp.linalg.norm(nodes - p, axis=-1) + d, jnp.inf))

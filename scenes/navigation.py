@@ -17,7 +17,9 @@ Floor obstacles (`floor_obstacles` of them): low boxes to drive over or around, 
 centred at x ~ U(2.5, 9.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
 height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays.
 Free-space distance (episode.distance: geodesic): the shortest path to the goal around the two wall
-obstacles for a robot of radius CLEARANCE (scenes.geodesic); floor obstacles can be driven over, so
+obstacles keeping r = min(scene.nav_clearance, C / 2 - GAP_MARGIN) from them and from the walls
+(scenes.geodesic; r = 0.4 m, robot 1's half-width, follows corners as tightly as the robot's width
+allows; 0.75 m, its half-diagonal, leaves room for its ends to swing round a corner); floor obstacles can be driven over, so
 they do not lengthen it. Collisions (episode / reward settings): any robot contact with a wall or a
 wall obstacle, or a contact of anything but a track belt with a floor obstacle (COLLISION_GEOMS).
 """
@@ -45,7 +47,8 @@ FLOOR_X, FLOOR_Y, FLOOR_SIDE = (START_X + 0.5, GOAL_X - 0.5), (-AREA_W / 2 + 0.5
 MAX_FLOOR_OBSTACLES = 12
 WALL_OBSTACLES = 2  # the first scene boxes: the hallway's or zigzag's obstacles; floor obstacles follow
 WALLS = ("wall_left", "wall_right", "wall_back", "wall_front")  # the area's wall planes (geom names)
-CLEARANCE = 0.4  # m, the robot's radius for the free-space distance: robot 1's half-width (0.39 m)
+NAV_CLEARANCE_LIMITS = (0.3, 1.0)  # m, what scene.nav_clearance may ask (robot 1: half-width 0.39, half-diagonal 0.75)
+GAP_MARGIN = 0.02  # m, a path through a gap C keeps at most C / 2 - GAP_MARGIN from its sides
 SPAWN_X = (0.75, 1.5)  # m, random spawns' x range
 AREA_LO, AREA_HI = (0.0, -AREA_W / 2), (AREA_LEN, AREA_W / 2)  # m, the area's corners (x, y)
 NAV_AREAS = ("hallway", "zigzag")  # the area kinds (scene.nav_kinds)
@@ -70,6 +73,7 @@ class NavScene:
   floor_obstacles: int  # low boxes in the obstacle area (0..MAX_FLOOR_OBSTACLES)
   floor_height: tuple[float, float]  # m, their height ~ U(min, max)
   gap: tuple[float, float] = (1.0, 2.0)  # m, C ~ U(min, max)
+  clearance: float = 0.4  # m, the free-space path's distance from walls and obstacles (module docstring)
 
   def __post_init__(self):
     if not self.kinds or any(k not in NAV_AREAS for k in self.kinds):
@@ -140,8 +144,9 @@ class NavScene:
     """Length (m) of the shortest path from pos (x, y, ...) to the goal around the wall obstacles
     (module docstring)."""
     pos_b, size_b = scene.box_pos[:WALL_OBSTACLES, :2], scene.box_size[:WALL_OBSTACLES, :2]
+    clearance = jnp.minimum(self.clearance, scene.xi[4] / 2 - GAP_MARGIN)  # xi[4]: this area's gap C
     return geodesic_distance(pos[:2], scene.goal[:2], pos_b - size_b, pos_b + size_b,
-                             jnp.array(AREA_LO), jnp.array(AREA_HI), CLEARANCE)
+                             jnp.array(AREA_LO), jnp.array(AREA_HI), clearance)
 
   def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the

@@ -11,7 +11,7 @@ import pytest
 from mjx_tracks.envs.config import load_config
 from mjx_tracks.envs.task_env import make_scene
 from scenes.geodesic import NODE_OFFSET, geodesic_distance, segment_blocked
-from scenes.navigation import AREA_HI, AREA_LO, CLEARANCE, WALL_OBSTACLES
+from scenes.navigation import AREA_HI, AREA_LO, GAP_MARGIN, WALL_OBSTACLES
 from scenes.scene import SceneState
 
 AREA = jnp.array(AREA_LO), jnp.array(AREA_HI)  # x in [0, 12], y in [-5, 5] m
@@ -57,20 +57,23 @@ def test_the_slab_test_lets_segments_graze_a_box_but_not_cross_it():
   assert segment_blocked(jnp.array([0.5, 2.0]), jnp.array([0.5, 0.5]), lo, hi)  # ends inside it
 
 
-def test_navigation_areas_use_their_wall_obstacles_and_the_robot_clearance():
-  scene = make_scene(load_config("nav-obstacles").scene)
+@pytest.mark.parametrize("clearance, gap, r", [(0.4, 2.0, 0.4), (0.75, 2.0, 0.75), (0.75, 1.0, 0.5 - GAP_MARGIN)])
+def test_navigation_areas_use_their_wall_obstacles_and_the_path_clearance(clearance, gap, r):
+  """r = min(scene.nav_clearance, C / 2 - GAP_MARGIN), C = xi[4], the area's gap."""
+  scene = make_scene(load_config("nav-obstacles", [f"scene.nav_clearance={clearance}"]).scene)
   pos = jnp.array([[4.5, 1.0, 0.5], [7.5, -1.0, 0.5]] + [[6.0, 0.0, 0.05]] * scene.floor_obstacles)
   size = jnp.array([[0.5, 4.0, 0.5], [0.5, 4.0, 0.5]] + [[5.0, 5.0, 0.05]] * scene.floor_obstacles)  # floor: no effect
   s = SceneState(pos, size, jnp.zeros(len(pos)), jnp.array([1.0, 0.0, 0.0]), jnp.float32(0.0),
-                 jnp.array([11.0, 0.0, 0.085]), jnp.float32(0.0), jnp.zeros(5), jnp.int32(1))
+                 jnp.array([11.0, 0.0, 0.085]), jnp.float32(0.0), jnp.array([0.0, 0.0, 0.0, 0.0, gap]), jnp.int32(1))
   lo, hi = pos[:WALL_OBSTACLES, :2] - size[:WALL_OBSTACLES, :2], pos[:WALL_OBSTACLES, :2] + size[:WALL_OBSTACLES, :2]
-  want = g([1.0, 0.0], [11.0, 0.0], lo, hi, CLEARANCE)
+  want = g([1.0, 0.0], [11.0, 0.0], lo, hi, r)
   assert float(scene.free_space_distance(s, s.spawn_pos)) == pytest.approx(want, abs=1e-5)
   assert want > 10.0 + 2.0  # the zigzag is longer than the straight line
 
 
-def test_the_free_space_distance_is_never_shorter_than_the_straight_line():
-  scene = make_scene(load_config("nav").scene)
+@pytest.mark.parametrize("clearance", [0.4, 0.75])
+def test_the_free_space_distance_is_never_shorter_than_the_straight_line(clearance):
+  scene = make_scene(load_config("nav", [f"scene.nav_clearance={clearance}", "scene.nav_gap=[0.85,2.0]"]).scene)
 
   def both(key):
     s = scene.sample(key, jnp.float32(1.0))
@@ -79,3 +82,12 @@ def test_the_free_space_distance_is_never_shorter_than_the_straight_line():
   geo, straight = map(np.asarray, jax.jit(jax.vmap(both))(jax.random.split(jax.random.PRNGKey(0), 500)))
   assert np.isfinite(geo).all()  # every drawn area leaves a way through
   assert (geo >= straight - 1e-4).all() and (geo > straight + 0.5).mean() > 0.3
+
+
+def test_a_goal_within_the_clearance_of_an_obstacle_is_still_reached():
+  """The goal 0.3 m right of the wall's face (x = 5.3), inside its 0.4 m inflation: the path runs
+  round the inflated wall to the corner (5.4, 3.4) and from there straight to the goal, seen past
+  the wall as it is (not inflated)."""
+  corner = (5.0 + R, 3.0 + R)
+  want = math.dist((1.0, 0.0), (4.0 - R, 3.0 + R)) + 1.0 + 2 * R + math.dist(corner, (5.3, 0.0))
+  assert g([1.0, 0.0], [5.3, 0.0]) == pytest.approx(want, abs=TOL)

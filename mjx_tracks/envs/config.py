@@ -23,7 +23,7 @@ import yaml
 from mjx_tracks.bounds import bound, violation
 from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
-from scenes.navigation import MAX_FLOOR_OBSTACLES, NAV_GAP_LIMITS
+from scenes.navigation import MAX_FLOOR_OBSTACLES, NAV_CLEARANCE_LIMITS, NAV_GAP_LIMITS
 from scenes.terrain_kinds import TERRAIN_PARAMS
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
@@ -206,6 +206,7 @@ class SceneConfig:
   nav_floor_obstacles: int = dataclasses.field(metadata=bound(0, MAX_FLOOR_OBSTACLES))  # nav: low boxes in the obstacle area
   nav_floor_height: tuple[float, float]  # m, nav: their height ~ U(min, max)
   nav_gap: tuple[float, float]  # m, nav: the gap C between the wall obstacles ~ U(min, max) (hard: narrow)
+  nav_clearance: float = dataclasses.field(metadata=bound(*NAV_CLEARANCE_LIMITS))  # m, nav: the free-space path's distance from walls
   terrains: tuple[str, ...]  # terrain: the kinds drawn per episode (scenes.terrain)
   terrain: TerrainRanges  # every terrain kind's parameter ranges
   random_spawn: bool
@@ -556,6 +557,7 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("evaluation", "held_out_terrain"): FROM_DEFAULTS,  # evaluation only: old runs get today's
               ("evaluation", "held_out_nav"): FROM_DEFAULTS,  # evaluation only: old runs get today's
               ("scene", "nav_gap"): [1.0, 2.0],  # before the gap setting: the original's U(1, 2) m
+              ("scene", "nav_clearance"): 0.4,  # before the setting: robot 1's half-width
               ("reward", "progress_form"): "closest",  # before potential shaping: the paper's closest distance
               ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines

@@ -26,7 +26,7 @@ class Nav(SceneKind):
   def make(self, s):
     from scenes.navigation import NavScene  # noqa: PLC0415
     return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,
-                    s.nav_floor_height, s.nav_gap)
+                    s.nav_floor_height, s.nav_gap, s.nav_clearance)
 
   def suite(self, cfg) -> list[str]:
     areas = cfg.scene.nav_kinds
