@@ -23,3 +23,24 @@ def test_the_gate_takes_physics_settings_only(capsys):
     gate.physics_of(["physics.solver_iterations=0"])
   with pytest.raises(BenchInputError, match="must divide"):
     gate.physics_of(["physics.timestep=0.019230769230769232"])  # 0.25 s / 13: a control period, not 0.05 s
+
+
+def test_the_culling_checks_fail_when_culling_drops_a_touch_the_c_engine_sees(jaguar_stairs):
+  """A descent starting on the top landing: the landing's touches rank far down MJX's belt-box pair
+  order (its sphere's centre is far from the robot), so 10 pairs drop them and 40 keep them."""
+  import dataclasses
+
+  from mjx_tracks.envs.config import default_config
+  from mjx_tracks.tools.drive import DriveSetup, scripted_rollout
+  from scenes import staircase as sc
+  import jax.numpy as jnp
+  stairs = sc.Staircase(jnp.float32(0.30), jnp.float32(0.17), jnp.int32(7))
+  setup = DriveSetup(jaguar_stairs, stairs, "down", control_period=0.1,
+                     goal_tolerance=default_config().episode.goal_tolerance)
+  qpos = scripted_rollout(setup, n_steps=5)  # still on the landing
+  base = jaguar_stairs.physics
+  checks = lambda **kw: gate.culling_checks(dataclasses.replace(base, **kw), jaguar_stairs, stairs, qpos, "r1")  # noqa: E731
+  assert all(c.ok for c in checks(box_pairs=40, contact_slots=48))
+  narrow = checks(box_pairs=10, contact_slots=4)
+  assert [c.ok for c in narrow] == [False, False] and narrow[1].value >= 10
+  assert checks(box_pairs=-1, contact_slots=-1) == []  # keeping everything: nothing to check

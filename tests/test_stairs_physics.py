@@ -3,12 +3,12 @@ batched (vmap) and single stepping agree."""
 
 import jax
 import jax.numpy as jnp
-import mujoco
 import numpy as np
 import pytest
 
 from mjx_tracks.envs.config import default_config
 from mjx_tracks.sim.control import Controller
+from mjx_tracks.sim.culling import culling_figures
 from mjx_tracks.tools.drive import DriveSetup, scripted_rollout, summarize
 from mjx_tracks.sim.pose import chassis_rpy
 from scenes import staircase as sc
@@ -36,31 +36,13 @@ def _assert_culling_keeps_every_touch(setup: DriveSetup, qpos: np.ndarray) -> No
   """At every state of the drive, MuJoCo's C engine (which keeps every pair) finds no more touching
   contacts than physics.contact_slots keeps, and each belt-box pair it finds touching is among the
   physics.box_pairs pairs MJX tests (nearest bounding spheres first, as MJX ranks them)."""
-  sim = setup.sim
-  box_pos, box_size = (np.asarray(x) for x in sc.step_boxes(setup.stairs))
-  mj = sim.c_model_with_boxes(box_pos, box_size)
-  boxes = np.asarray(sim.layout.scene_boxes)
-  belts = np.flatnonzero((mj.geom_type == mujoco.mjtGeom.mjGEOM_CAPSULE) & (mj.geom_contype != 0))
-  rbound = mj.geom_rbound.copy()
-  rbound[boxes] = np.linalg.norm(box_size, axis=-1)
-  d = mujoco.MjData(mj)
-  contacts, worst_rank = [], []
-  for q in qpos:
-    d.qpos[:] = q
-    mujoco.mj_forward(mj, d)
-    touching = [(c.geom1, c.geom2) for c in d.contact[:d.ncon] if c.dist < 0]
-    contacts.append(len(touching))
-    gap = (np.linalg.norm(d.geom_xpos[belts][:, None] - d.geom_xpos[boxes][None], axis=-1)
-           - rbound[belts][:, None] - rbound[boxes][None])  # MJX's broadphase distance
-    rank = np.argsort(np.argsort(gap.ravel(), kind="stable")).reshape(gap.shape)
-    ranks = [rank[np.flatnonzero(belts == g)[0], np.flatnonzero(boxes == b)[0]]
-             for g1, g2 in touching for g, b in ((g1, g2), (g2, g1)) if g in belts and b in boxes]
-    worst_rank.append(max(ranks, default=-1))
-  if sim.physics.contact_slots > 0:
-    assert max(contacts) <= sim.physics.contact_slots, (max(contacts), sim.physics.contact_slots)
-  if sim.physics.box_pairs > 0:
-    assert max(worst_rank) < sim.physics.box_pairs, (max(worst_rank), sim.physics.box_pairs)
-  assert max(contacts) >= 4  # the drive rests on its tracks: the check sees contacts
+  physics = setup.sim.physics
+  most, worst = culling_figures(setup.sim, setup.stairs, qpos)
+  if physics.contact_slots > 0:
+    assert most <= physics.contact_slots, (most, physics.contact_slots)
+  if physics.box_pairs > 0:
+    assert worst < physics.box_pairs, (worst, physics.box_pairs)
+  assert most >= 4 and worst >= 0  # the drive rests on its tracks and on the steps: the check sees contacts
 
 
 def test_random_actions_on_stairs_stay_finite_and_within_limits(jaguar_stairs):

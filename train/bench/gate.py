@@ -2,7 +2,8 @@
 against its tolerance, PASS or FAIL (the command exits 1 on a failure): flat-ground speed and yaw
 rate against the commanded ones, creep with the belts stopped on a 20-degree incline, the scripted
 stair controller of both robots up and down the paper's hardest staircase, robot 1's single-step
-limit (a step below the measured 0.275 m climbed, one far above it not), and a passive fall
+limit (a step below the measured 0.275 m climbed, one far above it not), the contact culling along
+those drives (every contact the C engine finds touching is kept, mjx_tracks.sim.culling), and a passive fall
 stepped by MJX under the settings against MuJoCo's C engine under the default ones. A faster
 physics setting is adopted only if it passes.
 
@@ -174,10 +175,25 @@ def stair_checks(physics, robot: str) -> list[Check]:
       passed = s["goal_reached"] and not s["tipped_over"]
       if what == "hardest":
         out.append(Check(f"robot {robot} scripted {direction} hardest staircase", passed, "reached", passed))
+        out += culling_checks(physics, sim, sc.Staircase(tread, riser, steps), q, f"robot {robot} {direction}")
       else:
         want = riser == STEP_BELOW
         out.append(Check(f"robot {robot} scripted single step {riser} m", passed,
                          "climbed" if want else "not climbed", passed == want))
+  return out
+
+
+def culling_checks(physics, sim, stairs, qpos, what: str) -> list[Check]:
+  """Along a drive, the C engine's touching contacts fit physics.contact_slots and its touching
+  belt-box pairs are among the physics.box_pairs MJX tests (mjx_tracks.sim.culling); -1 keeps all."""
+  from mjx_tracks.sim.culling import culling_figures  # noqa: PLC0415
+  most, worst = culling_figures(sim, stairs, qpos)
+  out = []
+  if physics.contact_slots > 0:
+    out.append(Check.at_most(f"{what}: most touching contacts (C engine)", most, physics.contact_slots))
+  if physics.box_pairs > 0:
+    out.append(Check.at_most(f"{what}: worst touching belt-box pair rank (C engine, 0-based)", worst,
+                             physics.box_pairs - 1))
   return out
 
 
