@@ -26,6 +26,7 @@ STEP_BELOW, STEP_ABOVE = 0.25, 0.35  # m, single steps below and far above robot
 #                                      results/terrain/single-step-limit.json)
 DRIVE_SECONDS = 20.0  # s, each scripted drive
 FALL = dict(height=0.10, roll=0.25, seconds=1.5)  # m above resting, rad, s: the passive fall of the C-engine check
+REFERENCE_ITERATIONS = 50  # solver and line-search iterations of the C engine's reference fall: converged
 
 
 @dataclasses.dataclass(frozen=True)
@@ -199,8 +200,9 @@ def culling_checks(physics, sim, stairs, qpos, what: str) -> list[Check]:
 
 def c_engine_check(physics) -> list[Check]:
   """Robot 1 falling from FALL['height'] with roll FALL['roll'] onto the floor, joints held, belts
-  still: MJX (no track model) under the settings against MuJoCo's C engine under the defaults;
-  the largest height and roll / pitch differences over the fall."""
+  still: MJX (no track model) under the settings against MuJoCo's C engine under the defaults with
+  REFERENCE_ITERATIONS solver and line-search iterations (a converged reference that does not move
+  with the defaults); the largest height and roll / pitch differences over the fall."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
   import mujoco  # noqa: PLC0415
@@ -212,7 +214,9 @@ def c_engine_check(physics) -> list[Check]:
   from mjx_tracks.sim.simulator import staircase_simulator  # noqa: PLC0415
   from scenes import staircase as sc  # noqa: PLC0415
   sim = staircase_simulator(get_robot(1), physics)
-  mj = compile_model(sim.robot, sc.world_xml(), default_config().physics)  # the C engine's reference model
+  reference = dataclasses.replace(default_config().physics, solver_iterations=REFERENCE_ITERATIONS,
+                                  ls_iterations=REFERENCE_ITERATIONS)
+  mj = compile_model(sim.robot, sc.world_xml(), reference)  # the C engine's reference model
   d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(sim.layout.n_joints))
   quat = [math.cos(FALL["roll"] / 2), math.sin(FALL["roll"] / 2), 0.0, 0.0]
   qpos0 = np.asarray(d.qpos).copy()
