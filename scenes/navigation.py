@@ -21,7 +21,7 @@ obstacles keeping r = min(scene.nav_clearance, C / 2 - GAP_MARGIN) from them and
 (scenes.geodesic; r = 0.4 m, robot 1's half-width, follows corners as tightly as the robot's width
 allows; 0.75 m, its half-diagonal, leaves room for its ends to swing round a corner); floor obstacles can be driven over, so
 they do not lengthen it. Collisions (episode / reward settings): any robot contact with a wall or a
-wall obstacle, or a contact of anything but a track belt with a floor obstacle (COLLISION_GEOMS).
+wall obstacle, or a contact of anything but a track belt with a floor obstacle (NavScene.collision_geoms).
 """
 
 from __future__ import annotations
@@ -72,8 +72,8 @@ class NavScene:
   random_goal: bool
   floor_obstacles: int  # low boxes in the obstacle area (0..MAX_FLOOR_OBSTACLES)
   floor_height: tuple[float, float]  # m, their height ~ U(min, max)
-  gap: tuple[float, float] = (1.0, 2.0)  # m, C ~ U(min, max)
-  clearance: float = 0.4  # m, the free-space path's distance from walls and obstacles (module docstring)
+  gap: tuple[float, float]  # m, C ~ U(min, max)
+  clearance: float  # m, the free-space path's distance from walls and obstacles (module docstring)
 
   def __post_init__(self):
     if not self.kinds or any(k not in NAV_AREAS for k in self.kinds):

@@ -236,9 +236,7 @@ class SceneConfig:
     _validate_terrain_ranges(self.terrain, key)
     lo, hi = self.nav_floor_height
     require(0.01 <= lo <= hi <= 0.5, f"{key}.nav_floor_height", f"needs 0.01 <= min <= max <= 0.5, got {[lo, hi]}")
-    lo, hi = self.nav_gap
-    require(NAV_GAP_LIMITS[0] <= lo <= hi <= NAV_GAP_LIMITS[1], f"{key}.nav_gap",
-            f"needs {NAV_GAP_LIMITS[0]} <= min <= max <= {NAV_GAP_LIMITS[1]}, got {[lo, hi]}")
+    validate_nav_gap(self.nav_gap, f"{key}.nav_gap")
     require(self.direction in ("up", "down"), f"{key}.direction", "must be 'up' or 'down'")
     require(self.sampler in SAMPLERS, f"{key}.sampler", f"must be one of {SAMPLERS}, got {self.sampler!r}")
     hint = f" ({self.variant!r} is now {_RENAMED_VARIANTS[self.variant]!r})" if self.variant in _RENAMED_VARIANTS else ""
@@ -253,6 +251,13 @@ class SceneConfig:
 # how the safety penalty is spread over an episode (mjx_tracks.envs.rewards.Monitor): the paper's moving
 # window of samples per step, or the change of the episode's running mean (its sum: the mean)
 SAFETY_FORMS = ("window", "episode_mean")
+def validate_nav_gap(gap: tuple[float, float], key: str) -> None:
+  """A navigation gap range C ~ U(min, max) (m) within NAV_GAP_LIMITS."""
+  lo, hi = gap
+  require(NAV_GAP_LIMITS[0] <= lo <= hi <= NAV_GAP_LIMITS[1], key,
+          f"needs {NAV_GAP_LIMITS[0]} <= min <= max <= {NAV_GAP_LIMITS[1]}, got {[lo, hi]}")
+
+
 PROGRESS_FORMS = ("closest", "potential")  # mjx_tracks.envs.rewards: the paper's closest-so-far rule | potential-based
 DISTANCES = ("euclidean", "geodesic")  # what the goal distance measures (scenes.kinds: SceneKind.distances)
 JITTER_LIMITS = (0.5, 3.1416, 1.0)  # m, rad, rad: the most a start jitter / trial variation may vary
@@ -348,9 +353,7 @@ class HeldOutNav:
 
   def validate(self, key: str) -> None:
     require_plain_name(self.name, f"{key}.name")
-    lo, hi = self.gap
-    require(NAV_GAP_LIMITS[0] <= lo <= hi <= NAV_GAP_LIMITS[1], f"{key}.gap",
-            f"needs {NAV_GAP_LIMITS[0]} <= min <= max <= {NAV_GAP_LIMITS[1]}, got {[lo, hi]}")
+    validate_nav_gap(self.gap, f"{key}.gap")
 
 
 @dataclasses.dataclass(frozen=True)
