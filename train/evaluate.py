@@ -5,8 +5,10 @@ l = l_min, h = h_max, the paper's highest complexity, 7 x 0.35 x 0.22 m by defau
 tasks every parameter of each kind), uniform (the task's ranges, uniform), incremental (the task's
 sampler at --eps), train (the task's own sampler at --eps), held-out/NAME (a fixed staircase of the
 task's evaluation.held_out), hardest/KIND (a terrain task's kind KIND alone, at its hardest),
-nav/KIND (a navigation task's area kind KIND alone: hallway or zigzag);
---suite runs the evaluation suite (suite_scenes). Trials run in parallel, one episode
+nav/KIND (a navigation task's area kind KIND alone: hallway or zigzag), BASE+CASE (scene BASE on
+a robot perturbed by one case of the task's evaluation.robustness, e.g. hardest+latency-period);
+--suite runs the evaluation suite (suite_scenes), --robustness the robustness suite (every case on
+the hardest and uniform scenes). Trials run in parallel, one episode
 each, deterministic policy: the exported RUN_DIR/policy, those exported at milestone budgets too
 (--milestones), or with --checkpoint [STEP] a training checkpoint (a killed run has no export yet).
 Writes RUN_DIR/eval-<scene>[@<budget>].json (mean +- std of progress, success, COG deviation,
@@ -31,7 +33,8 @@ from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.evaluation import (EVAL_EPS, EVAL_SEED, EVAL_TRIALS, SCENES, fewer_trials_path, milestone_folder,
-                              report_path, saved_milestones, scene_config, suite_scenes, trial_runner, trials_in)
+                              ROBUST, report_path, robustness_runner, robustness_scenes, saved_milestones, scene_config, suite_scenes,
+                              trial_runner, trials_in)
 from train.core.run_record import read_run_record, run_id_in, write_run_record
 
 BASELINE_ROOT = os.path.join("runs", "baselines")  # where --baseline runs go unless RUN_DIR is given
@@ -114,6 +117,9 @@ def parser() -> argparse.ArgumentParser:
                  f"alone) or {NAV}AREA (a navigation area alone); --suite lists a task's")
   p.add_argument("--suite", action="store_true", help="every scene of the task's evaluation suite "
                  "(hardest, uniform, each held-out staircase or terrain kind) instead of --scene")
+  p.add_argument("--robustness", action="store_true", help="the robustness suite (evaluation.robustness): the "
+                 "nominal robot and each perturbation alone, on the hardest (where the task has one) and uniform "
+                 "scenes; with --suite, both")
   p.add_argument("--eps", type=float, default=EVAL_EPS, help="difficulty for incremental / train scenes")
   p.add_argument("--seed", type=int, default=EVAL_SEED)
   p.add_argument("--out", help="report path (default RUN_DIR/eval-<scene>[@<budget>].json; one scene only)")
@@ -151,6 +157,27 @@ def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: Tas
       frames = render_frames(render_model, shown, **camera_for(scene_kind(cfg.scene.kind).camera))
       write_video(args.video, frames, fps=1 / cfg.control.period)
     lines.append(_summary(meta["task"], scene, budget, args.trials, per_trial, out))
+  return lines
+
+
+def _evaluate_robustness(args, meta: dict, base: str, budgets: list[int | None], cfg0: TaskConfig) -> list[str]:
+  """Every robustness case on scene `base` with the policy of each budget, in one batch and one
+  compilation (robustness_runner); writes each case's report (scene BASE+CASE) and its trials."""
+  if args.baseline:
+    policies = {None: _baseline_policy(args.baseline, scene_config(cfg0, base))}
+  else:
+    policies = {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}
+  cases = [c.name for c in cfg0.evaluation.robustness]
+  print(f"{base}: compiling and running {len(cases)} robustness cases x {args.trials} trials in one batch ...",
+        file=sys.stderr, flush=True)
+  observe = (lambda s: s) if args.baseline else (lambda s: s.obs)
+  run = robustness_runner(cfg0, base, policies[budgets[0]][0], args.trials, args.eps, args.seed, observe)
+  lines = []
+  for budget, (_, params, policy_step) in policies.items():
+    for case, per_trial in run(params).items():
+      scene = f"{base}{ROBUST}{case}"
+      out = _write_report(args, meta, scene, budget, policy_step, per_trial)
+      lines.append(_summary(meta["task"], scene, budget, args.trials, per_trial, out))
   return lines
 
 
@@ -193,9 +220,13 @@ def _summary(task: str, scene: str, budget: int | None, trials: int, per_trial: 
 
 def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
   """(scene, milestone budgets with None for the final policy) to evaluate; ValueError on bad input."""
-  scenes = suite_scenes(cfg) if args.suite else [args.scene]
-  for scene in scenes:
+  scenes = suite_scenes(cfg) if args.suite else [] if args.robustness else [args.scene]
+  for scene in scenes + (robustness_scenes(cfg) if args.robustness else []):
     scene_config(cfg, scene)  # ConfigError on an unknown scene
+  if args.robustness and (args.out or args.video):
+    raise ValueError("--out and --video take one scene; --robustness writes a report per case")
+  robust = [f"{ROBUST}{base}" for base in dict.fromkeys(s.partition(ROBUST)[0] for s in robustness_scenes(cfg))] \
+      if args.robustness else []  # +BASE: every case on BASE in one batch
   budgets: list[int | None] = [None]
   if args.baseline and (args.milestones or args.checkpoint is not None):
     raise ValueError("a baseline has no milestones nor checkpoints")
@@ -205,7 +236,7 @@ def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
     budgets = [*saved_milestones(args.run_dir), None]
   if len(scenes) * len(budgets) > 1 and (args.out or args.video):
     raise ValueError("--out and --video take one scene and one policy")
-  return [(scene, budgets) for scene in scenes]
+  return [(scene, budgets) for scene in scenes + robust]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -227,7 +258,9 @@ def main(argv: list[str] | None = None) -> int:
       meta = read_run_record(args.run_dir)
     cfg = from_dict(meta["config"])
     for scene, budgets in _jobs(args, cfg):
-      for line in _evaluate(args, meta, scene, budgets, cfg):
+      robust = scene.startswith(ROBUST)
+      for line in (_evaluate_robustness(args, meta, scene[1:], budgets, cfg) if robust else
+                   _evaluate(args, meta, scene, budgets, cfg)):
         print(line, flush=True)
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)

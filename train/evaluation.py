@@ -23,10 +23,41 @@ def suite_scenes(cfg: TaskConfig) -> list[str]:
   return scene_kind(cfg.scene.kind).suite(cfg)
 
 
+ROBUST = "+"  # BASE+CASE: an evaluation scene under one case of the robustness suite (evaluation.robustness)
+
+
+def robustness_scenes(cfg: TaskConfig) -> list[str]:
+  """The robustness suite: every case of evaluation.robustness on the hardest scene (where the
+  task has one) and on uniform scenes."""
+  bases = (["hardest"] if cfg.scene.has_hardest else []) + ["uniform"]
+  return [f"{base}{ROBUST}{case.name}" for base in bases for case in cfg.evaluation.robustness]
+
+
+def perturbed(cfg: TaskConfig, case_name: str) -> TaskConfig:
+  """The task on the nominal robot (randomization on, every key at NOMINAL; no hidden rays), then one
+  robustness case's overrides: one perturbation alone, whatever the policy trained with."""
+  from mjx_tracks.envs.config import apply_override, from_dict  # noqa: PLC0415
+  from mjx_tracks.envs.randomization import NOMINAL  # noqa: PLC0415
+  case = next((c for c in cfg.evaluation.robustness if c.name == case_name), None)
+  if case is None:
+    raise ConfigError(f"unknown robustness case {case_name!r}; evaluation.robustness has "
+                      f"{', '.join(c.name for c in cfg.evaluation.robustness) or '(none)'}")
+  raw = cfg.to_dict()
+  raw["randomization"].update({k: list(v) if isinstance(v, tuple) else v for k, v in NOMINAL.items()}, enabled=True)
+  raw["observation"]["noise"] = 0.0
+  for item in case.set:
+    raw = apply_override(raw, item)
+  return from_dict(raw)
+
+
 def scene_config(cfg: TaskConfig, scene: str) -> TaskConfig:
   """The task with its scenes drawn as an evaluation scene says: uniform, incremental or train
-  (any kind), or one of its scene kind's own (hardest, HELD_OUT + NAME, ...; scenes.kinds); every
-  trial's start varied by evaluation.trial_variation, so that trials are samples."""
+  (any kind), or one of its scene kind's own (hardest, HELD_OUT + NAME, ...; scenes.kinds), or
+  BASE+CASE (one of those under a robustness case); every trial's start varied by
+  evaluation.trial_variation, so that trials are samples."""
+  if ROBUST in scene:
+    base, _, case = scene.partition(ROBUST)
+    return perturbed(scene_config(cfg, base), case)
   if scene in COMMON_SCENES:
     drawn = cfg if scene == "train" else replace_scene(cfg, sampler=scene)
   else:
@@ -42,20 +73,21 @@ EVAL_SEED = 1  # their reset keys: jax.random.split(PRNGKey(EVAL_SEED), trials)
 EVAL_EPS = 1.0  # the difficulty handed to reset (pinned scenes such as hardest ignore it)
 
 
-def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=lambda s: s.obs):
-  """(core, rollout): the task env and a pure rollout(params, keys) -> (sums, qpos of trial 0 per
-  step, trial 0's scene), one episode per trial from `core.reset_at(key, eps)` with actions
-  `make_act(params)(observe(state))` (a policy sees the observation; a scripted controller may see
-  the whole state); sums holds each trial's METRICS sums, length and final chassis position."""
+def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=lambda s: s.obs, core=None):
+  """(core, rollout): the task env and a pure rollout(params, keys[, perturbations]) -> (sums, qpos
+  of trial 0 per step, trial 0's scene), one episode per trial from `core.reset_at(key, eps)` (with
+  each trial's perturbation, if given) with actions `make_act(params)(observe(state))` (a policy
+  sees the observation; a scripted controller may see the whole state); sums holds each trial's
+  METRICS sums, length and final chassis position. core: the env (default TrackedRobotEnv(cfg))."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
   from mjx_tracks.envs.task_env import METRICS, TrackedRobotEnv  # noqa: PLC0415
-  core = TrackedRobotEnv(cfg)
+  core = core or TrackedRobotEnv(cfg)
 
-  def rollout(params, keys):
+  def rollout(params, keys, perturbations=None):
     act = make_act(params)
-    s = jax.vmap(core.reset_at, in_axes=(0, None, None))(keys, jnp.float32(eps), jnp.float32(1.0))
+    s = jax.vmap(core.reset_at, in_axes=(0, None, None, 0))(keys, jnp.float32(eps), jnp.float32(1.0), perturbations)
     acc0 = {**{k: jnp.zeros(trials) for k in METRICS}, "length": jnp.zeros(trials),
             "final_pos": s.pipeline_state.data.qpos[:, :3]}
 
@@ -100,6 +132,34 @@ def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, 
     # trial 0's scene in a C model, for rendering its recorded qpos
     render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size, scene0.box_yaw) if record else None
     return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
+
+  return run
+
+
+def robustness_runner(cfg: TaskConfig, base: str, make_act, trials: int, eps: float, seed: int,
+                      observe=lambda s: s.obs):
+  """run(params) -> {case: per-trial figures}: every case of the robustness suite on scene `base`,
+  trials each, in one batch and one program (the perturbations are data: TrackedRobotEnv
+  every_path). Every case sees the same scenes and starts (common random numbers: paired trials)."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.envs.randomization import draw  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
+  names = [c.name for c in cfg.evaluation.robustness]
+  cases = [scene_config(cfg, f"{base}{ROBUST}{name}") for name in names]
+  core = TrackedRobotEnv(cases[0], every_path=True)
+  keys = trial_keys(trials, seed)
+  perts = [jax.vmap(lambda k, c=c: draw(c.randomization, jax.random.fold_in(k, 2), jnp.float32(eps), core.sim.layout.n_joints,
+                                        c.observation.noise, c.control.period))(keys) for c in cases]
+  perts = jax.tree_util.tree_map(lambda *x: jnp.concatenate(x), *perts)
+  _, rollout = trial_rollout(cases[0], make_act, trials * len(cases), eps, observe, core)
+  compiled, all_keys = jax.jit(rollout), jnp.tile(keys, (len(cases), 1))
+
+  def run(params):
+    acc, _, _ = compiled(params, all_keys, perts)
+    figures = per_trial_figures(acc)
+    return {name: {k: v[i * trials:(i + 1) * trials] for k, v in figures.items()} for i, name in enumerate(names)}
 
   return run
 

@@ -11,6 +11,7 @@ import sys
 EXTRAS = {
     "studies": ("distributed", "rliable", "arch", "pandas", "matplotlib"),
     "server": ("fastapi", "uvicorn", "plotly", "distributed", "rliable"),  # it launches studies, compares runs
+    "export": ("jax2onnx", "onnx", "onnxruntime"),  # train.export, train.onnx_drive
 }
 
 

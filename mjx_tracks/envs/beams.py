@@ -76,11 +76,12 @@ class BeamLayout:
     """Ray origin (3,) and world directions (n_rays, 3), not normalized (camera-axis length 1)."""
     return cam_pos, jnp.asarray(self.dirs) @ cam_mat.T
 
-  def features(self, depth: jax.Array, key: jax.Array | None = None) -> jax.Array:
-    """Per-ray z-depth (-1 for no hit) -> (n_features,) band means, bounded to [0, 3]."""
+  def features(self, depth: jax.Array, key: jax.Array | None = None, hidden=None) -> jax.Array:
+    """Per-ray z-depth (-1 for no hit) -> (n_features,) band means, bounded to [0, 3]; each ray
+    hidden with probability `hidden` (None: the layout's noise)."""
     valid = (depth >= 0) & (depth <= self.far)
-    if key is not None and self.noise > 0:
-      valid &= jax.random.uniform(key, depth.shape) >= self.noise
+    if key is not None and (hidden is not None or self.noise > 0):
+      valid &= jax.random.uniform(key, depth.shape) >= (self.noise if hidden is None else hidden)
     lo, hi = self.depth_range
     value = jnp.where((depth >= lo) & (depth <= hi), depth, 0.0)
     band = jnp.asarray(self.band)
@@ -89,14 +90,31 @@ class BeamLayout:
     return jnp.clip(total / jnp.maximum(count, 1.0), 0.0, FEATURE_MAX)
 
 
-def cast(layout: BeamLayout, m: mjx.Model, d: mjx.Data, cam_site: int) -> jax.Array:
-  """z-depth of every ray from the camera site (m; -1 where nothing is hit)."""
-  pnt, vecs = layout.world_rays(d.site_xpos[cam_site], d.site_xmat[cam_site])
+def tilted(cam_mat: jax.Array, pitch) -> jax.Array:
+  """The camera's orientation pitched by `pitch` rad about its x axis (> 0: looking further down)."""
+  c, s = jnp.cos(pitch), jnp.sin(pitch)
+  rot = jnp.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])  # R_x(-pitch): -z turns toward -y
+  return cam_mat @ rot
+
+
+def cast(layout: BeamLayout, m: mjx.Model, d: mjx.Data, cam_site: int, pitch=None) -> jax.Array:
+  """z-depth of every ray from the camera site (m; -1 where nothing is hit), the camera pitched by
+  `pitch` rad (None: as mounted)."""
+  cam_mat = d.site_xmat[cam_site] if pitch is None else tilted(d.site_xmat[cam_site], pitch)
+  pnt, vecs = layout.world_rays(d.site_xpos[cam_site], cam_mat)
   dist, _ = jax.vmap(lambda v: mjx.ray(m, d, pnt, v, geomgroup=RAY_GROUPS))(vecs)
   return dist
 
 
 def depth_beams(layout: BeamLayout, m: mjx.Model, d: mjx.Data, cam_site: int,
-                key: jax.Array | None = None) -> jax.Array:
-  """Beam features (vertical then horizontal), in m, from one camera pose."""
-  return layout.features(cast(layout, m, d, cam_site), key)
+                key: jax.Array | None = None, pitch=None, range_noise=None, hidden=None) -> jax.Array:
+  """Beam features (vertical then horizontal), in m, from one camera pose (pitched by `pitch` rad);
+  with range_noise r, each hit's depth reads depth x (1 + N(0, r)) (a stereo camera's error grows
+  with range); hidden: each ray's probability to be hidden (None: the layout's noise)."""
+  depth = cast(layout, m, d, cam_site, pitch)
+  k_hide = key
+  if range_noise is not None and key is not None:
+    k_hide, k_range = jax.random.split(key)
+    noisy = depth * (1.0 + range_noise * jax.random.normal(k_range, depth.shape))
+    depth = jnp.where(depth >= 0, jnp.maximum(noisy, 0.0), depth)
+  return layout.features(depth, k_hide, hidden)

@@ -21,6 +21,7 @@ from typing import Any
 import yaml
 
 from mjx_tracks.bounds import bound, violation
+from mjx_tracks.envs.randomization import RandomizationConfig
 from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
 from scenes.navigation import MAX_FLOOR_OBSTACLES, NAV_CLEARANCE_LIMITS, NAV_GAP_LIMITS
@@ -357,15 +358,32 @@ class HeldOutNav:
 
 
 @dataclasses.dataclass(frozen=True)
+class RobustnessCase:
+  """One case of the robustness suite: the nominal robot with these overrides (KEY=VALUE)."""
+  name: str
+  set: tuple[str, ...]
+
+  def validate(self, key: str) -> None:
+    require_plain_name(self.name, f"{key}.name")
+    for item in self.set:
+      require(isinstance(item, str) and item.startswith(PERTURBABLE), f"{key}.set",
+              lambda: f"overrides of {' or '.join(PERTURBABLE)} keys, got {show(item)}")
+
+
+PERTURBABLE = ("randomization.", "observation.noise=")  # what a robustness case may change
+
+
+@dataclasses.dataclass(frozen=True)
 class EvaluationConfig:
   trial_variation: tuple[float, float, float]  # evaluation scenes' start jitter (SceneConfig.start_jitter)
   held_out: tuple[HeldOutScene, ...]  # stair tasks: fixed staircases of the evaluation suite
   held_out_terrain: tuple[HeldOutTerrain, ...]  # terrain tasks: fixed terrains of the kinds they draw
   held_out_nav: tuple[HeldOutNav, ...]  # nav tasks: areas with narrower gaps or denser floor obstacles
+  robustness: tuple[RobustnessCase, ...]  # train.evaluate --robustness: the cases of the robustness suite
 
   def validate(self, key: str) -> None:
     validate_jitter(self.trial_variation, f"{key}.trial_variation")
-    for field in ("held_out", "held_out_terrain", "held_out_nav"):
+    for field in ("held_out", "held_out_terrain", "held_out_nav", "robustness"):
       names = [h.name for h in getattr(self, field)]
       require(len(set(names)) == len(names), f"{key}.{field}", f"names repeat: {names}")
       for i, h in enumerate(getattr(self, field)):
@@ -385,6 +403,7 @@ class TaskConfig:
   episode: EpisodeConfig
   physics: PhysicsConfig
   evaluation: EvaluationConfig
+  randomization: RandomizationConfig
 
   def validate(self, key: str = "") -> None:
     """Every section, then what needs several: the robot's joints, the scene kind's own checks
@@ -416,6 +435,11 @@ class TaskConfig:
             lambda: f"{self.scene.kind} scenes have nothing to collide with (collisions: nav scenes)")
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
+    r = self.randomization  # its ranges act only where it is enabled
+    require(not r.enabled or r.action_delay[1] <= round(steps), "randomization.action_delay",
+            lambda: f"at most a control period, {round(steps)} substeps, got {list(r.action_delay)}")
+    require(not r.enabled or r.period_jitter < round(steps), "randomization.period_jitter",
+            lambda: f"less than a control period, {round(steps)} substeps, got {r.period_jitter}")
 
   def to_dict(self) -> dict:
     return _to_plain(dataclasses.asdict(self))
@@ -564,7 +588,9 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("reward", "progress_form"): "closest",  # before potential shaping: the paper's closest distance
               ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines
-              ("episode", "end_on_collision"): False}  # before collision safety: collisions go on
+              ("episode", "end_on_collision"): False,  # before collision safety: collisions go on
+              ("randomization",): FROM_DEFAULTS,
+              ("evaluation", "robustness"): FROM_DEFAULTS}  # evaluation only: old runs get today's  # before sim-to-real randomization: off (enabled: false)
 
 
 def _with_added_keys(raw: dict) -> dict:
@@ -595,11 +621,28 @@ def default_config(overrides: typing.Sequence[str] = ()) -> TaskConfig:
   return from_dict(raw)
 
 
-def load_config(task: str, overrides: typing.Sequence[str] = ()) -> TaskConfig:
-  """configs/defaults.yaml <- configs/<task>.yaml <- overrides, validated."""
+MAX_EXTENDS = 4  # how deep task files may extend one another
+
+
+def _task_yaml(task: str, seen: tuple[str, ...] = ()) -> dict:
+  """configs/<task>.yaml merged over the task it `extends` (a task's variant states only what differs)."""
   if task not in available_tasks():
-    raise ConfigError(f"unknown task {task!r}; available: {', '.join(available_tasks())}", "task")
-  raw = _merge({"task": task, **_read_yaml(DEFAULTS)}, _read_yaml(task))
+    key = "task" if not seen else f"{seen[-1]}.yaml: extends"
+    raise ConfigError(f"unknown task {task!r}; available: {', '.join(available_tasks())}", key)
+  raw = _read_yaml(task)
+  base = raw.pop("extends", None)
+  if base is None:
+    return raw
+  require(isinstance(base, str) and base not in (*seen, task) and len(seen) < MAX_EXTENDS, f"{task}.yaml: extends",
+          lambda: f"must name another task, without cycles, at most {MAX_EXTENDS} deep; got {show(base)}")
+  inherited = _task_yaml(base, (*seen, task))
+  inherited.pop("task", None)  # the variant is its own task
+  return _merge(inherited, raw)
+
+
+def load_config(task: str, overrides: typing.Sequence[str] = ()) -> TaskConfig:
+  """configs/defaults.yaml <- configs/<task>.yaml (over the task it extends) <- overrides, validated."""
+  raw = _merge({"task": task, **_read_yaml(DEFAULTS)}, _task_yaml(task))
   for item in overrides:
     raw = apply_override(raw, item)
   return from_dict(raw)

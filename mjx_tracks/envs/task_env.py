@@ -17,12 +17,14 @@ from mujoco import mjx
 from mjx_tracks.envs.beams import BeamLayout, depth_beams
 from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig
 from mjx_tracks.envs.observations import Sensors, observe, part_sizes
+from mjx_tracks.envs import randomization as rnd
 from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, normalizer_init, on_stairs
 from mjx_tracks.metrics import STEP_NAMES as METRICS  # the per-step metrics (mjx_tracks.metrics.STEP)
 from mjx_tracks.robots import get_robot
 from mjx_tracks.sim import mjx_private
 from mjx_tracks.sim.collisions import CollisionWatch
 from mjx_tracks.sim.control import Controller
+from mjx_tracks.sim.layout import BELT_SIDE
 from mjx_tracks.sim.pose import chassis_rpy
 from mjx_tracks.sim.simulator import Simulator
 from scenes.curriculum import Curriculum
@@ -49,6 +51,7 @@ class EnvState:
   penalty_k: jax.Array  # () global penalty normalization K
   collided: jax.Array  # () bool, the robot touched a wall or obstacle earlier in the episode
   key: jax.Array
+  robust: rnd.RobustState | None = None  # the episode's randomization (None: randomization off)
 
 
 def make_scene(s: SceneConfig) -> StairScene | NavScene | TerrainScene:
@@ -59,7 +62,9 @@ def make_scene(s: SceneConfig) -> StairScene | NavScene | TerrainScene:
 class TrackedRobotEnv(Env):
   """Brax environment of one task; nothing on self changes after __init__."""
 
-  def __init__(self, cfg: TaskConfig):
+  def __init__(self, cfg: TaskConfig, every_path: bool = False):
+    """every_path: compile every randomization path whatever cfg.randomization says, so that
+    perturbations given to reset_at as data (the robustness suite) run in one program."""
     self.cfg = cfg
     self.robot = get_robot(cfg.robot)
     try:
@@ -78,6 +83,9 @@ class TrackedRobotEnv(Env):
         o.vertical_beams if "vertical_beams" in o.parts else 0,
         o.horizontal_beams if "horizontal_beams" in o.parts else 0,
         o.band_px, o.rays_per_band, o.depth_range, self.robot.camera_range[1], o.noise)
+    self.rand = cfg.randomization
+    self.randomized = cfg.randomization.enabled or every_path  # the state carries a RobustState
+    self.acting = frozenset(g for g in rnd.GROUPS if every_path or cfg.randomization.acts(g))  # costly paths compiled
     self.monitor = Monitor(cfg.reward, cfg.episode)
     c = cfg.scene.curriculum
     self.curriculum = Curriculum(window=c.window, rule=c.rule)
@@ -101,13 +109,9 @@ class TrackedRobotEnv(Env):
 
   def step(self, state: State, action: jax.Array) -> State:
     es: EnvState = state.pipeline_state
-    m = self.sim.with_boxes(es.scene.box_pos, es.scene.box_size, es.scene.box_yaw)
+    m = self._model(es.scene, es.robust)
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
-    belts = self.controller.belt_speeds(v, w)
-    if self.watch.active:
-      data, collided = self.sim.advance_watching(m, es.data, belts, targets, self.substeps, self.watch)
-    else:
-      data, collided = self.sim.advance(m, es.data, belts, targets, self.substeps), jnp.bool_(False)
+    data, collided, robust = self._advance(m, es, self.controller.belt_speeds(v, w), targets)
     data = self._sense(m, data)
     # a physics blow-up ends the episode and keeps the last finite state
     finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
@@ -130,7 +134,7 @@ class TrackedRobotEnv(Env):
     key, k_obs = jax.random.split(es.key)
     es = es.replace(data=data, targets=targets, closest=closest, window=window, key=key, signal_sum=signal_sum,
                     steps=steps, penalty_sum=es.penalty_sum + self.monitor.safety_scale() * rate,
-                    collided=es.collided | collided)
+                    collided=es.collided | collided, robust=robust)
     # keys stay those of reset (wrappers may add their own): update values in place
     flags = {**flags, "first_collision": collided & ~state.pipeline_state.collided}
     metrics = {**state.metrics,
@@ -140,22 +144,63 @@ class TrackedRobotEnv(Env):
                          done=terminated.astype(jnp.float32), metrics=metrics)
 
   # --- the curriculum wrapper's reset -------------------------------------------------------
-  def reset_at(self, rng: jax.Array, eps: jax.Array, penalty_k: jax.Array) -> State:
-    """Draws a scene at difficulty eps and places the robot at its spawn."""
+  def reset_at(self, rng: jax.Array, eps: jax.Array, penalty_k: jax.Array,
+               perturbation: rnd.Perturbation | None = None) -> State:
+    """Draws a scene at difficulty eps and places the robot at its spawn; with randomization, the
+    episode's perturbation is drawn too (or given)."""
     k_scene, k_obs, k_next = jax.random.split(rng, 3)
     scene = self.scene.sample(k_scene, eps)
-    m = self.sim.with_boxes(scene.box_pos, scene.box_size, scene.box_yaw)
+    robust = None
+    if self.randomized:  # its own stream: the paper's tasks draw as before
+      p = perturbation if perturbation is not None else self.draw_perturbation(jax.random.fold_in(k_scene, 2), eps)
+      robust = rnd.RobustState(perturbation=p, belts=jnp.zeros(len(BELT_SIDE)))
+    m = self._model(scene, robust)
     spawn, yaw, joints = self._start(scene, jax.random.fold_in(k_scene, 1))
     data = self._sense(m, self.sim.init_data(spawn, yaw, joints))
     d0 = self._distance(data.xpos[self.sim.layout.chassis_body], scene)
     es = EnvState(data=data, scene=scene, targets=joints, d0=d0, closest=d0,
                   window=jnp.zeros(self.cfg.reward.safety_window), signal_sum=jnp.float32(0.0),
                   steps=jnp.int32(0), penalty_sum=jnp.float32(0.0),
-                  penalty_k=jnp.asarray(penalty_k, jnp.float32), collided=jnp.bool_(False), key=k_next)
+                  penalty_k=jnp.asarray(penalty_k, jnp.float32), collided=jnp.bool_(False), key=k_next,
+                  robust=robust)
     zero = jnp.float32(0.0)
     metrics = {k: zero for k in METRICS}
     return State(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=zero, done=zero,
                  metrics=metrics, info={"eps": jnp.asarray(eps, jnp.float32)})
+
+  def draw_perturbation(self, key: jax.Array, eps: jax.Array) -> rnd.Perturbation:
+    """One episode's draw of the task's randomization (the nominal robot where it is off)."""
+    return rnd.draw(self.rand, key, eps, self.sim.layout.n_joints, self.cfg.observation.noise, self.cfg.control.period)
+
+  # --- the physics of one control step ------------------------------------------------------
+  def _model(self, scene: SceneState, robust: rnd.RobustState | None) -> mjx.Model:
+    """The model of one environment: its scene's boxes, its episode's dynamics."""
+    m = self.sim.with_boxes(scene.box_pos, scene.box_size, scene.box_yaw)
+    if robust is not None and "model" in self.acting:
+      m = rnd.with_dynamics(m, robust.perturbation, self.sim.layout.chassis_body, self.sim.layout.joint_qvel)
+    return m
+
+  def _advance(self, m: mjx.Model, es: EnvState, belts: jax.Array, targets: jax.Array):
+    """(data, collided, robust state) after one control period with the command (belt speeds m/s,
+    joint targets rad); with randomization: belt gains and friction, a push, a late command and a
+    jittered period (mjx_tracks.envs.randomization)."""
+    data, n, late, robust = es.data, self.substeps, {}, es.robust
+    if robust is not None:
+      p = robust.perturbation
+      k_push, k_period = jax.random.split(jax.random.fold_in(es.key, 11))  # beside the paper's stream
+      belts = belts * rnd.belt_gains(p, BELT_SIDE)
+      late["mu"] = jnp.array([self.robot.mu_along, self.robot.mu_across]) * p.friction
+      if "timing" in self.acting:
+        late.update(held=(robust.belts, es.targets), delay=p.delay)
+        n = rnd.period_substeps(p, self.substeps, k_period)
+      if "push" in self.acting:
+        data = data.replace(qvel=rnd.push(data.qvel, p, k_push)[0])
+      robust = robust.replace(belts=belts)
+    if self.watch.active:
+      data, collided = self.sim.advance_watching(m, data, belts, targets, n, self.watch, **late)
+    else:
+      data, collided = self.sim.advance(m, data, belts, targets, n, **late), jnp.bool_(False)
+    return data, collided, robust
 
   def _start(self, scene: SceneState, key: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """The robot's start: the scene's spawn (ground point, yaw) and joints at 0, each varied by
@@ -201,12 +246,17 @@ class TrackedRobotEnv(Env):
 
   def sensors(self, es: EnvState, m: mjx.Model, key: jax.Array) -> Sensors:
     """Every reading an observation part may use (mjx_tracks.envs.observations)."""
-    d = es.data
-    beams = (depth_beams(self.beams, m, d, self.sim.layout.camera_site, key)
+    d, r = es.data, es.robust
+    real = {} if r is None else {"pitch": r.perturbation.camera_pitch, "range_noise": r.perturbation.depth_noise,
+                                 "hidden": r.perturbation.hidden}
+    beams = (depth_beams(self.beams, m, d, self.sim.layout.camera_site, key, **real)
              if self.beams.n_features else jnp.zeros(0))
     rot = d.xmat[self.sim.layout.chassis_body]
-    return Sensors(linear_velocity=rot.T @ d.qvel[0:3], angular_velocity=d.qvel[3:6],
-                   rpy=chassis_rpy(d.qpos), joints=d.qpos[self.sim.layout.joint_qpos],
+    rpy, rate, velocity, joints = chassis_rpy(d.qpos), d.qvel[3:6], rot.T @ d.qvel[0:3], d.qpos[self.sim.layout.joint_qpos]
+    if r is not None:  # what the robot's sensors read
+      rpy, rate, velocity, joints = rnd.noisy_imu_and_joints(r.perturbation, rpy, rate, velocity, joints,
+                                                             jax.random.fold_in(key, 3))
+    return Sensors(linear_velocity=velocity, angular_velocity=rate, rpy=rpy, joints=joints,
                    position=d.qpos[0:3], goal=es.scene.goal,
                    vertical_beams=beams[: self.beams.n_vertical], horizontal_beams=beams[self.beams.n_vertical:])
 

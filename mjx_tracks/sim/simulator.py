@@ -21,9 +21,11 @@ from mjx_tracks.sim.tracks import TrackModel, apply_belt_contacts, aref_shift
 SPAWN_CLEARANCE = 0.005  # m, the chassis spawns this far above resting height, then settles
 
 
-def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array) -> mjx.Data:
-  """One physics substep: mjx.step with the belt contacts of the track model."""
-  return mjx_private.step(m, d, lambda m, d: apply_belt_contacts(m, d, tm, belt_speeds),
+def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array,
+                     mu: jax.Array | None = None) -> mjx.Data:
+  """One physics substep: mjx.step with the belt contacts of the track model (belt friction mu:
+  (along, across), default the track model's)."""
+  return mjx_private.step(m, d, lambda m, d: apply_belt_contacts(m, d, tm, belt_speeds, mu),
                           lambda m, d, slip: aref_shift(m, d, tm, slip))
 
 
@@ -91,24 +93,35 @@ class Simulator:
       d = d.replace(ctrl=joint_angles)
     return d.replace(qpos=qpos)
 
-  def substep(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array) -> mjx.Data:
+  def substep(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, mu: jax.Array | None = None) -> mjx.Data:
     """One physics step of timestep seconds with the given belt speeds (m/s, order of BELTS)."""
-    return step_with_tracks(m, d, self.tracks, belt_speeds)
+    return step_with_tracks(m, d, self.tracks, belt_speeds, mu)
 
   def advance(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, joint_targets: jax.Array,
-              n_substeps: int) -> mjx.Data:
-    """Sets the joint servo targets (rad), then runs n_substeps physics steps."""
-    d = d.replace(ctrl=joint_targets)
-    return jax.lax.fori_loop(0, n_substeps, lambda _, x: self.substep(m, x, belt_speeds), d)
+              n_substeps, **late) -> mjx.Data:
+    """Sets the joint servo targets (rad), then runs n_substeps physics steps (late: see _run)."""
+    return self._run(m, d, belt_speeds, joint_targets, n_substeps, None, **late)[0]
 
   def advance_watching(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, joint_targets: jax.Array,
-                       n_substeps: int, watch: CollisionWatch) -> tuple[mjx.Data, jax.Array]:
+                       n_substeps, watch: CollisionWatch, **late) -> tuple[mjx.Data, jax.Array]:
     """advance(), and whether any of its substeps' contacts was a collision (watch.touching)."""
-    def substep(_, carry):
+    return self._run(m, d, belt_speeds, joint_targets, n_substeps, watch, **late)
+
+  def _run(self, m, d, belts, targets, n_substeps, watch: CollisionWatch | None, mu: jax.Array | None = None,
+           held: tuple[jax.Array, jax.Array] | None = None, delay=0) -> tuple[mjx.Data, jax.Array]:
+    """n_substeps (an int, or traced: a jittered period) physics steps with the command (belt speeds
+    m/s, joint targets rad); held: the previous command's (belt speeds, joint targets), which act
+    for the first `delay` substeps (a late command); mu: the belts' friction (along, across)."""
+    def substep(i, carry):
       x, hit = carry
-      x = self.substep(m, x, belt_speeds)
-      return x, hit | watch.touching(x)
-    return jax.lax.fori_loop(0, n_substeps, substep, (d.replace(ctrl=joint_targets), jnp.bool_(False)))
+      b = belts
+      if held is not None:
+        late = i < delay
+        b = jnp.where(late, held[0], belts)
+        x = x.replace(ctrl=jnp.where(late, held[1], targets))
+      x = self.substep(m, x, b, mu)
+      return x, (hit | watch.touching(x)) if watch is not None else hit
+    return jax.lax.fori_loop(0, n_substeps, substep, (d.replace(ctrl=targets), jnp.bool_(False)))
 
   def plain_step(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:
     """mjx.step without the track model (benchmark baseline)."""

@@ -9,7 +9,8 @@ import os
 
 import numpy as np
 
-from mjx_tracks.envs.config import load_config
+from mjx_tracks.envs.config import REWARD_SIGNALS, load_config
+from train.evaluation import ROBUST
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.study.executor import overview
 from train.study.figures import write_figures
@@ -64,7 +65,7 @@ def suite_table(results: StudyResults) -> list[str]:
   terrains, each terrain kind's hardest, each navigation area): runs, success, progress and the rate
   of trials with a collision (nav scenes), IQM [95 % CI]."""
   lines = ["| group | task | budget | scene | runs | success | progress | collisions |", "|---" * 8 + "|"]
-  others = [s for s in results.scenes() if s not in ("hardest", "uniform")]
+  others = [s for s in results.scenes() if s not in ("hardest", "uniform") and ROBUST not in s]
   for group, task, budget in results.groups():
     for scene in others:
       fig = {m: results.final(group, task, budget, scene, m) for m in ("success", "progress", "collided")}
@@ -72,6 +73,26 @@ def suite_table(results: StudyResults) -> list[str]:
         est = iqm_intervals(fig)
         lines.append(f"| {group} | {task} | {budget_text(budget)} | {scene} | {len(fig['success'])} | "
                      f"{ci_text(est.get('success'))} | {ci_text(est.get('progress'))} | {ci_text(est.get('collided'))} |")
+  return lines if len(lines) > 2 else []
+
+
+def robustness_table(results: StudyResults) -> list[str]:
+  """One row per (group, task, budget, robustness case) (train.evaluate --robustness): IQM [95 % CI]
+  over seeds of success on the hardest and uniform scenes and mean +- sd of the task's safety figure
+  (mjx_tracks.metrics: pitch rate, COG deviation) on the hardest, the nominal robot first."""
+  robust = [s for s in results.scenes() if ROBUST in s]
+  cases = list(dict.fromkeys(s.partition(ROBUST)[2] for s in robust))
+  lines = ["| group | task | budget | case | runs | success hardest | success uniform | safety hardest |",
+           "|---" * 8 + "|"]
+  for group, task, budget in results.groups():
+    signal = REWARD_SIGNALS[load_config(task).reward.kind] or "pitch_rate"
+    for case in cases:
+      fig = lambda m, base: results.final(group, task, budget, f"{base}{ROBUST}{case}", m)  # noqa: E731
+      est = iqm_intervals({base: fig("success", base) for base in ("hardest", "uniform")})
+      if est:
+        lines.append(f"| {group} | {task} | {budget_text(budget)} | {case} | {len(fig('success', 'uniform'))} | "
+                     f"{ci_text(est.get('hardest'))} | {ci_text(est.get('uniform'))} | "
+                     f"{signal.replace('_', ' ')} {_mean_sd(fig(signal, 'hardest'))} |")
   return lines if len(lines) > 2 else []
 
 
@@ -185,6 +206,13 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
     out += ["## The rest of the evaluation suite", "",
             f"Held-out configurations (`{HELD_OUT}NAME`), each terrain kind's hardest (`{HARDEST}KIND`) and "
             f"each navigation area (`{NAV}KIND`): IQM over seeds [{LEVEL:.0%} CI].", "", *suite, ""]
+  robust = robustness_table(results)
+  if robust:
+    out += ["## Robustness", "",
+            "Each policy on the nominal robot (no randomization) and under each perturbation of the "
+            "robustness suite alone (`evaluation.robustness`, `python -m train.evaluate RUN --robustness`): "
+            f"success IQM over seeds [{LEVEL:.0%} CI]; the task's safety figure, mean +- sd over seeds.", "",
+            *robust, ""]
   base = baseline_table(results)
   if base:
     out += ["## Baselines", "",

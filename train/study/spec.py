@@ -16,7 +16,8 @@ from train.evaluation import EVAL_TRIALS
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
 from train.core.presets import get_preset, with_hyperparams
 
-STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES)}
+STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES),
+                  "robustness": False}
 GROUP_DEFAULTS = {"preset": "gpu", "library": DEFAULT_LIBRARY, "early_stop": "", "set": [], "hp": [], "backend": "gpu", "budgets": "runs", "tasks": []}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
@@ -48,6 +49,7 @@ class StudySpec:
   eval_trials: int  # trials per evaluation scene of every finished run
   compare: tuple[tuple[str, str], ...]  # task pairs (A, B): the report's probability that A beats B
   baselines: tuple[str, ...]  # mjx_tracks.baselines evaluated on each task they can drive, beside the groups
+  robustness: bool  # every run and baseline also evaluated on the robustness suite (train.evaluate --robustness)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,6 +67,7 @@ class Cell:
   milestones: tuple[int, ...] = ()  # smaller budgets whose policies this run exports and evaluates
   hp: tuple[str, ...] = ()  # train.run --hp KEY=VALUE
   library: str = DEFAULT_LIBRARY  # train.run --library
+  robustness: bool = False  # its evaluation adds the robustness suite
 
   @property
   def id(self) -> str:
@@ -78,7 +81,8 @@ class Cell:
   def eval_args(self, trials: int) -> list[str]:
     """`python -m train.evaluate RUN` arguments of this cell's evaluation suite, less the database."""
     own = ["--baseline", self.preset, "--task", self.task] if self.is_baseline else []
-    return [*own, "--suite", "--trials", str(trials)] + (["--milestones"] if self.milestones else [])
+    return [*own, "--suite", "--trials", str(trials)] + (["--milestones"] if self.milestones else []) + \
+        (["--robustness"] if self.robustness else [])
 
   def train_args(self) -> list[str]:
     """`python -m train.run` arguments of this cell, less its run folder and database."""
@@ -213,8 +217,9 @@ def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order; then one evaluation of each
   baseline on each task it can drive (its trials vary by themselves; seed: the study's first)."""
   trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones, g.hp,
-                  g.library)
+                  g.library, spec.robustness)
              for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g)
              for seed in spec.seeds]
-  return trained + [Cell(BASELINE_GROUP + name, task, 0, spec.seeds[0], BASELINE_ALGO, name, "", (), "gpu")
+  return trained + [Cell(BASELINE_GROUP + name, task, 0, spec.seeds[0], BASELINE_ALGO, name, "", (), "gpu",
+                         robustness=spec.robustness)
                     for task in spec.tasks for name in baselines_for(load_config(task), spec.baselines)]

@@ -1,0 +1,71 @@
+"""ONNX export (train.export) of the session's PPO run: onnxruntime against the JAX policy on 1,000
+observations, the layout metadata against the env's, a failed check writes nothing; onnxruntime
+drives the simulator (train.onnx_drive). The robustness suite of train.evaluate on a baseline."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+pytest.importorskip("jax2onnx", reason="the [export] extra")
+
+
+def test_the_onnx_policy_matches_the_jax_policy_and_carries_its_layout(ppo_run, tmp_path, capsys):
+  from mjx_tracks.envs.config import from_dict
+  from mjx_tracks.envs.task_env import TrackedRobotEnv, observation_names
+  from train import export
+  run_dir, _ = ppo_run
+  path = str(tmp_path / "policy.onnx")
+  assert export.main([run_dir, "--onnx", path]) == 0
+  meta = export.read_metadata(path)
+  assert meta["parity"]["observations"] == 1000 and meta["parity"]["max_abs_difference"] <= 1e-5
+  # parity again, independently of the command: the file's actions against the JAX policy's
+  fn, spec, params, _ = export.policy_function(run_dir)
+  obs = export.parity_observations(params, 1000, seed=7)
+  with open(path, "rb") as f:
+    got = export.onnx_actions(f.read(), obs)
+  np.testing.assert_allclose(got, np.asarray(fn(obs)), atol=1e-5)
+  assert np.abs(got).max() <= 1.0 and got.std() > 0  # actions in [-1, 1] that depend on the observation
+  with open(os.path.join(run_dir, "run.json")) as f:
+    cfg = from_dict(json.load(f)["config"])
+  env = TrackedRobotEnv(cfg)
+  assert [o["name"] for o in meta["observation"]] == observation_names(env)
+  assert [a["name"] for a in meta["action"]] == list(env.controller.dims)
+  assert meta["control"]["period_s"] == cfg.control.period and meta["task"] == "asc-inc-cog"
+
+
+def test_a_failed_parity_check_writes_nothing(ppo_run, tmp_path, capsys):
+  from train import export
+  path = tmp_path / "bad.onnx"
+  assert export.main([ppo_run[0], "--onnx", str(path), "--tolerance", "-1"]) == 1
+  assert not path.exists() and not (tmp_path / "bad.onnx.tmp").exists()
+  assert "nothing written" in capsys.readouterr().err
+
+
+def test_onnxruntime_drives_the_simulator_as_the_jax_policy_does(ppo_run, tmp_path, capsys):
+  from train import export, onnx_drive
+  path = str(tmp_path / "p.onnx")
+  assert export.main([ppo_run[0], "--onnx", path]) == 0
+  assert onnx_drive.main([path, "--trials", "3", "--scene", "uniform", "--compare", ppo_run[0]]) == 0
+  lines = capsys.readouterr().out.strip().splitlines()[-2:]
+  assert "onnxruntime" in lines[0] and "jax" in lines[1]
+  assert onnx_drive.main([str(tmp_path / "none.onnx")]) == 2
+
+
+def test_the_robustness_suite_runs_every_case_and_low_friction_hurts_full_throttle(tmp_path, capsys):
+  """`--robustness` writes a report per case and base scene; full throttle on the hardest staircase
+  gets less far on half the friction than on the nominal robot (the earlier measure: 0.19 vs 1.0)."""
+  from mjx_tracks.envs.config import load_config
+  from train import evaluate
+  from train.evaluation import robustness_scenes
+  out = tmp_path / "full"
+  assert evaluate.main([str(out), "--baseline", "full", "--task", "asc-inc-cog", "--robustness", "--trials", "2",
+                        "--db", str(tmp_path / "db.sqlite")]) == 0
+  scenes = robustness_scenes(load_config("asc-inc-cog"))
+  assert len(scenes) == 2 * len(load_config("asc-inc-cog").evaluation.robustness)
+  progress = {}
+  for scene in scenes:
+    with open(out / f"eval-{scene}.json") as f:
+      progress[scene] = json.load(f)["metrics"]["progress"]["mean"]
+  assert progress["hardest+friction-low"] < progress["hardest+nominal"] - 0.3
