@@ -197,3 +197,13 @@ def test_a_tilted_camera_sees_what_mj_ray_sees_from_the_tilted_mount(jaguar_stai
   down = np.asarray(cast(layout, sim.model, d, cam, jnp.float32(0.0873)))
   floor = (level > 0) & (down > 0)
   assert np.median(down[floor] - level[floor]) < 0  # looking down: the floor comes nearer
+
+
+def test_depth_range_noise_is_relative_and_misses_stay_misses():
+  """with_range_noise: a 2 m hit reads 2 x (1 + N(0, 0.05)) (std 0.1 m); a miss (-1) stays -1."""
+  from mjx_tracks.envs.beams import with_range_noise
+  depth = jnp.concatenate([jnp.full(N, 2.0), jnp.full(10, -1.0)])
+  got = np.asarray(with_range_noise(depth, 0.05, jax.random.PRNGKey(2)))
+  assert abs(got[:N].mean() - 2.0) < 5 * 0.1 / np.sqrt(N)
+  assert got[:N].std() == pytest.approx(0.1, rel=0.06)
+  np.testing.assert_array_equal(got[N:], -1.0)

@@ -115,6 +115,11 @@ def depth_beams(layout: BeamLayout, m: mjx.Model, d: mjx.Data, cam_site: int,
   k_hide = key
   if range_noise is not None and key is not None:
     k_hide, k_range = jax.random.split(key)
-    noisy = depth * (1.0 + range_noise * jax.random.normal(k_range, depth.shape))
-    depth = jnp.where(depth >= 0, jnp.maximum(noisy, 0.0), depth)
+    depth = with_range_noise(depth, range_noise, k_range)
   return layout.features(depth, k_hide, hidden)
+
+
+def with_range_noise(depth: jax.Array, r, key: jax.Array) -> jax.Array:
+  """Each hit's depth x (1 + N(0, r)), at least 0; misses (-1) stay misses."""
+  noisy = depth * (1.0 + r * jax.random.normal(key, depth.shape))
+  return jnp.where(depth >= 0, jnp.maximum(noisy, 0.0), depth)
