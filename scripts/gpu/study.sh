@@ -7,7 +7,8 @@
 # $OUT/$STUDY-study.tgz every 30 s and at the end. Afterwards, anywhere:
 # `python -m train.study report $STUDY --root DIR`.
 # FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
-# its finished runs are skipped. A study still running when the machine goes back resumes the same
+# its finished runs are skipped. Without FROM, a study folder committed at results/studies/$STUDY
+# (its state.json) is where it starts from; FROM=none starts afresh. A study still running when the machine goes back resumes the same
 # way from the last pack (its running attempts start again).
 # The study runs from a copy of the tree made at its start (/tmp/studies/src), so later calls, which
 # bring the working tree again, never change the code of a study under way.
@@ -27,7 +28,12 @@ running() { [ -f "$pidfile" ] && kill -0 "$(cat "$pidfile")" 2>/dev/null; }
 start() {
   mkdir -p "$root"
   rm -rf "${root:?}/src" && mkdir "$root/src" && tar cf - --exclude=./.whl --exclude=./.bench --exclude=./runs . | tar xf - -C "$root/src"
-  if [ -n "${FROM:-}" ]; then rm -rf "${root:?}/$study" && cp -r "$FROM" "$root/$study"; fi
+  local from=${FROM:-}
+  if [ -z "$from" ] && [ -f "results/studies/$study/state.json" ]; then from="results/studies/$study"; fi
+  if [ -n "$from" ] && [ "$from" != none ]; then
+    echo "starting from $from (its finished runs are skipped)" | tee -a "$log"
+    rm -rf "${root:?}/$study" && cp -r "$from" "$root/$study"
+  fi
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1) x $(nvidia-smi -L | wc -l)"
   { echo "command: ${cmd[*]}"; echo "device: $device, $(nproc) CPU cores, date: $(date -u +%FT%TZ)"; } | tee -a "$log"
   local pp=${PYTHONPATH:-}
