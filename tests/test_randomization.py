@@ -207,3 +207,16 @@ def test_depth_range_noise_is_relative_and_misses_stay_misses():
   assert abs(got[:N].mean() - 2.0) < 5 * 0.1 / np.sqrt(N)
   assert got[:N].std() == pytest.approx(0.1, rel=0.06)
   np.testing.assert_array_equal(got[N:], -1.0)
+
+
+def test_pushes_come_at_their_rate_with_their_speed_in_any_direction():
+  """push: pushed with probability period / push_interval; a push adds push_velocity (m/s) to the
+  chassis' horizontal velocity, its direction ~ U(0, 2 pi) (mean of cos and sin 0)."""
+  c = dataclasses.replace(load_config("asc-inc-cog-robust").randomization, push_velocity=0.7, push_interval=1.0)
+  p = jax.tree_util.tree_map(lambda x: x[0], _draws(c, n=1))  # probability 0.25 / 1.0
+  qvel, pushed = jax.vmap(lambda k: rnd.push(jnp.zeros(12), p, k))(jax.random.split(jax.random.PRNGKey(5), N))
+  pushed, kick = np.asarray(pushed), np.asarray(qvel[:, :2])
+  assert abs(pushed.mean() - 0.25) < 5 * np.sqrt(0.25 * 0.75 / N)
+  np.testing.assert_allclose(np.linalg.norm(kick[pushed], axis=1), 0.7, rtol=1e-5)
+  assert np.all(kick[~pushed] == 0) and np.all(np.asarray(qvel[:, 2:]) == 0)
+  assert np.all(np.abs(kick[pushed].mean(axis=0)) < 5 * 0.7 / np.sqrt(2 * pushed.sum()))
