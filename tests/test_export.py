@@ -6,9 +6,6 @@ import json
 import os
 
 import numpy as np
-import pytest
-
-pytest.importorskip("jax2onnx", reason="the [export] extra")
 
 
 def test_the_onnx_policy_matches_the_jax_policy_and_carries_its_layout(ppo_run, tmp_path, capsys):
