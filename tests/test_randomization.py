@@ -220,3 +220,32 @@ def test_pushes_come_at_their_rate_with_their_speed_in_any_direction():
   np.testing.assert_allclose(np.linalg.norm(kick[pushed], axis=1), 0.7, rtol=1e-5)
   assert np.all(kick[~pushed] == 0) and np.all(np.asarray(qvel[:, 2:]) == 0)
   assert np.all(np.abs(kick[pushed].mean(axis=0)) < 5 * 0.7 / np.sqrt(2 * pushed.sum()))
+
+
+def test_a_task_file_extends_another_and_robustness_cases_are_checked_on_load(tmp_path, monkeypatch):
+  """-robust tasks are their paper task plus randomization; a bad case (a key that does not exist,
+  a value out of range, enabled) fails on load naming it; a case runs with grow off at any eps."""
+  from mjx_tracks.envs.config import ConfigError
+  from train.evaluation import scene_config
+  base, robust = load_config("asc-inc-cog").to_dict(), load_config("asc-inc-cog-robust").to_dict()
+  differ = {k for k in base if base[k] != robust[k]}
+  assert differ == {"task", "randomization", "observation"} and robust["task"] == "asc-inc-cog-robust"
+  for bad in ("randomization.frixion=[0.5, 0.5]", "randomization.mass=[0.1, 0.1]", "randomization.enabled=false"):
+    with pytest.raises(ConfigError, match="robustness"):
+      load_config("asc-inc-cog", [f'evaluation.robustness=[{{name: x, set: ["{bad}"]}}]'])
+  with pytest.raises(ConfigError, match="action_delay"):  # a control period of 10 substeps
+    scene_config(load_config("asc-inc-cog", ["control.period=0.1"]), "hardest+latency-period")
+  case = scene_config(load_config("asc-inc-cog-robust", ["randomization.grow=true"]), "hardest+friction-low")
+  r = case.randomization
+  assert (r.enabled, r.grow, r.friction_along, r.mass, case.observation.noise) == (True, False, (0.5, 0.5), (1.0, 1.0), 0.0)
+
+
+def test_servo_gain_and_damping_reach_the_model(jaguar_stairs):
+  sim = jaguar_stairs
+  p = jax.tree_util.tree_map(lambda x: x[0], _draws(load_config("asc-inc-cog-robust").randomization, n=1))
+  p = p.replace(servo_gain=jnp.float32(0.5), joint_damping=jnp.float32(3.0))
+  m = rnd.with_dynamics(sim.model, p, sim.layout.chassis_body, sim.layout.joint_qvel)
+  np.testing.assert_allclose(np.asarray(m.actuator_gainprm[:, 0]), 0.5 * np.asarray(sim.model.actuator_gainprm[:, 0]))
+  np.testing.assert_allclose(np.asarray(m.actuator_biasprm[:, 1:3]), 0.5 * np.asarray(sim.model.actuator_biasprm[:, 1:3]))
+  damping = np.asarray(m.dof_damping)
+  assert np.all(damping[sim.layout.joint_qvel] == 3.0) and np.all(np.delete(damping, sim.layout.joint_qvel) == 0.0)

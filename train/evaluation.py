@@ -35,7 +35,8 @@ def robustness_scenes(cfg: TaskConfig) -> list[str]:
 
 def perturbed(cfg: TaskConfig, case_name: str) -> TaskConfig:
   """The task on the nominal robot (randomization on, every key at NOMINAL; no hidden rays), then one
-  robustness case's overrides: one perturbation alone, whatever the policy trained with."""
+  robustness case's overrides: one perturbation alone, whatever the policy trained with (and at
+  any eps: grow off)."""
   from mjx_tracks.envs.config import apply_override, from_dict  # noqa: PLC0415
   from mjx_tracks.envs.randomization import NOMINAL  # noqa: PLC0415
   case = next((c for c in cfg.evaluation.robustness if c.name == case_name), None)
@@ -43,7 +44,8 @@ def perturbed(cfg: TaskConfig, case_name: str) -> TaskConfig:
     raise ConfigError(f"unknown robustness case {case_name!r}; evaluation.robustness has "
                       f"{', '.join(c.name for c in cfg.evaluation.robustness) or '(none)'}")
   raw = cfg.to_dict()
-  raw["randomization"].update({k: list(v) if isinstance(v, tuple) else v for k, v in NOMINAL.items()}, enabled=True)
+  raw["randomization"].update({k: list(v) if isinstance(v, tuple) else v for k, v in NOMINAL.items()},
+                              enabled=True, grow=False)  # a case's values as written, whatever eps
   raw["observation"]["noise"] = 0.0
   for item in case.set:
     raw = apply_override(raw, item)
@@ -83,7 +85,7 @@ def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=la
   import jax.numpy as jnp  # noqa: PLC0415
 
   from mjx_tracks.envs.task_env import METRICS, TrackedRobotEnv  # noqa: PLC0415
-  core = core or TrackedRobotEnv(cfg)
+  core = TrackedRobotEnv(cfg) if core is None else core
 
   def rollout(params, keys, perturbations=None):
     act = make_act(params)
@@ -144,13 +146,13 @@ def robustness_runner(cfg: TaskConfig, base: str, make_act, trials: int, eps: fl
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
-  from mjx_tracks.envs.randomization import draw  # noqa: PLC0415
+  from mjx_tracks.envs.randomization import draw, perturbation_key  # noqa: PLC0415
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   names = [c.name for c in cfg.evaluation.robustness]
   cases = [scene_config(cfg, f"{base}{ROBUST}{name}") for name in names]
   core = TrackedRobotEnv(cases[0], every_path=True)
   keys = trial_keys(trials, seed)
-  perts = [jax.vmap(lambda k, c=c: draw(c.randomization, jax.random.fold_in(k, 2), jnp.float32(eps), core.sim.layout.n_joints,
+  perts = [jax.vmap(lambda k, c=c: draw(c.randomization, perturbation_key(k), jnp.float32(eps), core.sim.layout.n_joints,
                                         c.observation.noise, c.control.period))(keys) for c in cases]
   perts = jax.tree_util.tree_map(lambda *x: jnp.concatenate(x), *perts)
   _, rollout = trial_rollout(cases[0], make_act, trials * len(cases), eps, observe, core)

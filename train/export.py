@@ -111,9 +111,15 @@ def export(run_dir: str, path: str, checkpoint: str | None = None, tolerance: fl
            "task": meta["task"], "run_id": meta["run_id"], "policy_step": step, "config": meta["config"],
            "parity": parity}
   onnx.helper.set_model_props(model, {META + k: json.dumps(v) for k, v in props.items()})
-  tmp = f"{path}.tmp"
-  onnx.save(model, tmp)
-  os.replace(tmp, path)  # a reader never sees half a file
+  import tempfile  # noqa: PLC0415
+  fd, tmp = tempfile.mkstemp(suffix=".onnx.tmp", dir=os.path.dirname(os.path.abspath(path)))
+  os.close(fd)
+  try:
+    onnx.save(model, tmp)
+    os.replace(tmp, path)  # a reader never sees half a file
+  finally:
+    if os.path.exists(tmp):
+      os.unlink(tmp)
   return parity
 
 
@@ -143,6 +149,10 @@ def main(argv: list[str] | None = None) -> int:
     return 2
   except ValueError as e:
     print(f"error: {e}", file=sys.stderr)
+    return 1
+  except Exception as e:  # noqa: BLE001  (the converter's own errors: a primitive it cannot convert)
+    print(f"error: the ONNX conversion failed, nothing written: {type(e).__name__}: {str(e).splitlines()[0][:300]}",
+          file=sys.stderr)
     return 1
   print(f"{args.onnx}: parity on {parity['observations']} observations, max |ONNX - JAX| = "
         f"{parity['max_abs_difference']:.2e} (tolerance {parity['tolerance']:g})")

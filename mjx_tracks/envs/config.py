@@ -364,10 +364,22 @@ class RobustnessCase:
   set: tuple[str, ...]
 
   def validate(self, key: str) -> None:
+    """Each override names a randomization key (not enabled, grow) or observation.noise, with a value
+    of its type and range (the case's fit to a task's control period is checked when it runs)."""
+    from mjx_tracks.envs.randomization import NOMINAL  # noqa: PLC0415
     require_plain_name(self.name, f"{key}.name")
+    raw = {"randomization": {"enabled": True, "grow": False, "push_interval": 15.0, **NOMINAL},
+           "observation": {"noise": 0.0}}
     for item in self.set:
-      require(isinstance(item, str) and item.startswith(PERTURBABLE), f"{key}.set",
-              lambda: f"overrides of {' or '.join(PERTURBABLE)} keys, got {show(item)}")
+      require(isinstance(item, str) and item.startswith(PERTURBABLE) and item.partition("=")[0] not in
+              ("randomization.enabled", "randomization.grow"), f"{key}.set",
+              lambda: f"overrides of {' or '.join(PERTURBABLE)} keys (not enabled, grow), got {show(item)}")
+      raw = apply_override(raw, item)
+    try:
+      parse_mapping(RandomizationConfig, raw["randomization"], "randomization").validate("randomization")
+      require(0.0 <= raw["observation"]["noise"] < 1.0, "observation.noise", "must be in [0, 1)")
+    except ConfigError as e:
+      raise ConfigError(f"{key}.set: {e}", e.key) from None
 
 
 PERTURBABLE = ("randomization.", "observation.noise=")  # what a robustness case may change
@@ -589,8 +601,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines
               ("episode", "end_on_collision"): False,  # before collision safety: collisions go on
-              ("randomization",): FROM_DEFAULTS,
-              ("evaluation", "robustness"): FROM_DEFAULTS}  # evaluation only: old runs get today's  # before sim-to-real randomization: off (enabled: false)
+              ("randomization",): FROM_DEFAULTS,  # before sim-to-real randomization: off (enabled: false)
+              ("evaluation", "robustness"): FROM_DEFAULTS}  # evaluation only: old runs get today's
 
 
 def _with_added_keys(raw: dict) -> dict:

@@ -8,9 +8,9 @@ from the nominal robot (NOMINAL) to the whole range as the curriculum's eps goes
 Where each draw acts:
   model (with_dynamics):    chassis mass and inertia, payload, centre of mass, contact friction of
                             everything but the belts, servo kp / kv, joint damping
-  track model (belt_mu):    the belts' friction along and across (mu_along, mu_across)
-  control (belt_speeds):    each side's belt speed gain
-  substeps (TaskEnv.step):  action delay, control period jitter, pushes
+  track model (mu of Simulator.advance): the belts' friction along and across (mu_along, mu_across)
+  control (belt_gains):     each side's belt speed gain
+  substeps (TrackedRobotEnv._advance): action delay, control period jitter, pushes
   sensors (noisy_imu_and_joints, beams.depth_beams): IMU and joint noise and bias; depth range
                             noise, hidden rays and camera pitch
 Noise levels are data in the Perturbation too: one compiled program runs any mix of perturbations
@@ -46,7 +46,7 @@ class RandomizationConfig:
   push_velocity: float = dataclasses.field(metadata=bound(0.0, 5.0))  # m/s
   push_interval: float = dataclasses.field(metadata=bound(0.25))  # s, mean time between pushes
   action_delay: tuple[int, int]  # physics substeps ~ U{min..max}
-  period_jitter: int = dataclasses.field(metadata=bound(0, 100))  # substeps, +- U{0..a}
+  period_jitter: int = dataclasses.field(metadata=bound(0, 100))  # substeps a: U{-a..a} added to a period
   imu_noise: tuple[float, float, float]  # std: roll / pitch rad, angular velocity rad/s, velocity m/s
   imu_bias: tuple[float, float]  # half-widths: roll / pitch rad, angular velocity rad/s
   joint_noise: float = dataclasses.field(metadata=bound(0.0, 0.5))  # rad, std
@@ -101,7 +101,7 @@ class Perturbation:
   servo_gain: jax.Array  # () x, servo kp and kv
   joint_damping: jax.Array  # () N m s / rad, added to every flipper / arm joint
   delay: jax.Array  # () int32 substeps the command arrives late, ~ U{min..max}
-  period_jitter: jax.Array  # () int32 substeps a: each period lasts U{-a..a} substeps more
+  period_jitter: jax.Array  # () int32 substeps a: each period lasts U{-a..a} substeps more (or less)
   push_velocity: jax.Array  # () m/s of a push
   push_probability: jax.Array  # () per control step: period / push_interval
   imu_bias: jax.Array  # (5,) roll, pitch (rad) and angular velocity (rad/s) biases, each ~ U(-a, a)
@@ -111,6 +111,13 @@ class Perturbation:
   depth_noise: jax.Array  # () std of each ray's relative range error
   hidden: jax.Array  # () probability that a ray is hidden (observation.noise)
   camera_pitch: jax.Array  # () rad, ~ U(min, max)
+
+
+def perturbation_key(rng: jax.Array) -> jax.Array:
+  """The key of an episode's draw from its reset key: apart from the three reset splits into
+  (scene, observation, step) keys (split(rng, 3)[i] is fold_in(rng, i) under threefry's
+  partitionable mode, so 3 is a fourth stream), the same for training resets and evaluation."""
+  return jax.random.fold_in(rng, 3)
 
 
 def _widen(r, nominal, g):
@@ -135,7 +142,7 @@ def draw(c: RandomizationConfig, key: jax.Array, eps: jax.Array, n_joints: int, 
     return jax.random.uniform(next(ks), shape + a.shape, minval=-1.0, maxval=1.0) * a
 
   f = lambda x: jnp.asarray(x, jnp.float32) * g * on  # a noise level, as grown
-  lo, hi = _widen(c.action_delay, (0, 0), g * on)
+  lo, hi = _widen(c.action_delay, NOMINAL["action_delay"], g * on)
   delay = jax.random.randint(next(ks), (), jnp.round(lo).astype(jnp.int32), jnp.round(hi).astype(jnp.int32) + 1)
   rate_bias = sym(c.imu_bias[1], (3,))
   return Perturbation(

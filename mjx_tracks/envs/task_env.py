@@ -152,7 +152,7 @@ class TrackedRobotEnv(Env):
     scene = self.scene.sample(k_scene, eps)
     robust = None
     if self.randomized:  # its own stream: the paper's tasks draw as before
-      p = perturbation if perturbation is not None else self.draw_perturbation(jax.random.fold_in(k_scene, 2), eps)
+      p = perturbation if perturbation is not None else self.draw_perturbation(rnd.perturbation_key(rng), eps)
       robust = rnd.RobustState(perturbation=p, belts=jnp.zeros(len(BELT_SIDE)))
     m = self._model(scene, robust)
     spawn, yaw, joints = self._start(scene, jax.random.fold_in(k_scene, 1))
@@ -189,7 +189,7 @@ class TrackedRobotEnv(Env):
       p = robust.perturbation
       k_push, k_period = jax.random.split(jax.random.fold_in(es.key, 11))  # beside the paper's stream
       belts = belts * rnd.belt_gains(p, BELT_SIDE)
-      late["mu"] = jnp.array([self.robot.mu_along, self.robot.mu_across]) * p.friction
+      late["mu"] = jnp.array([self.sim.tracks.mu_along, self.sim.tracks.mu_across]) * p.friction
       if "timing" in self.acting:
         late.update(held=(robust.belts, es.targets), delay=p.delay)
         n = rnd.period_substeps(p, self.substeps, k_period)

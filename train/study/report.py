@@ -65,7 +65,7 @@ def suite_table(results: StudyResults) -> list[str]:
   terrains, each terrain kind's hardest, each navigation area): runs, success, progress and the rate
   of trials with a collision (nav scenes), IQM [95 % CI]."""
   lines = ["| group | task | budget | scene | runs | success | progress | collisions |", "|---" * 8 + "|"]
-  others = [s for s in results.scenes() if s not in ("hardest", "uniform") and ROBUST not in s]
+  others = [s for s in results.scenes() if s not in ("hardest", "uniform")]
   for group, task, budget in results.groups():
     for scene in others:
       fig = {m: results.final(group, task, budget, scene, m) for m in ("success", "progress", "collided")}
@@ -80,7 +80,7 @@ def robustness_table(results: StudyResults) -> list[str]:
   """One row per (group, task, budget, robustness case) (train.evaluate --robustness): IQM [95 % CI]
   over seeds of success on the hardest and uniform scenes and mean +- sd of the task's safety figure
   (mjx_tracks.metrics: pitch rate, COG deviation) on the hardest, the nominal robot first."""
-  robust = [s for s in results.scenes() if ROBUST in s]
+  robust = [s for s in results.scenes(robustness=True) if ROBUST in s]
   cases = list(dict.fromkeys(s.partition(ROBUST)[2] for s in robust))
   lines = ["| group | task | budget | case | runs | success hardest | success uniform | safety hardest |",
            "|---" * 8 + "|"]

@@ -56,9 +56,10 @@ class StudyResults:
         out[n] = float(fig[0])
     return out
 
-  def scenes(self) -> list[str]:
-    """Evaluation scenes of the finished runs: hardest, uniform, then the others by name."""
-    found = {e["scene"] for r in self.runs for e in r.evals}
+  def scenes(self, robustness: bool = False) -> list[str]:
+    """Evaluation scenes of the finished runs: hardest, uniform, then the others by name; those of
+    the robustness suite (BASE+CASE, train.evaluation.ROBUST) only with robustness=True."""
+    found = {e["scene"] for r in self.runs for e in r.evals if robustness or "+" not in e["scene"]}
     first = [s for s in ("hardest", "uniform") if s in found]
     return first + sorted(found - set(first))
 

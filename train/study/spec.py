@@ -12,7 +12,7 @@ from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks
                                     parse_mapping, require, require_plain_name, show)
 from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
 from train.core.early_stop import NO_EARLY_STOP, parse_early_stop
-from train.evaluation import EVAL_TRIALS
+from train.evaluation import EVAL_TRIALS, robustness_scenes, scene_config
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
 from train.core.presets import get_preset, with_hyperparams
 
@@ -150,6 +150,9 @@ def _check_runs(spec: StudySpec) -> None:
         cfg = load_config(task, tuple(get_preset(g.algo, g.preset).config_overrides) + g.set)
         if g.early_stop:
           parse_early_stop(g.early_stop, cfg)
+        if spec.robustness:  # its cases fit the task (e.g. a latency of at most a control period)
+          for scene in robustness_scenes(cfg):
+            scene_config(cfg, scene)
       except ValueError as e:  # ConfigError included
         raise ConfigError(f"groups[{i}] ({g.name}) on {task}: {e}", getattr(e, "key", None)) from None
 
