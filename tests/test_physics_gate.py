@@ -39,9 +39,10 @@ def test_the_culling_checks_fail_when_culling_drops_a_touch_the_c_engine_sees(ja
   stairs = sc.Staircase(jnp.float32(0.30), jnp.float32(0.17), jnp.int32(7))
   setup = DriveSetup(jaguar_stairs, stairs, "down", control_period=0.1,
                      goal_tolerance=default_config().episode.goal_tolerance)
+  from mjx_tracks.sim.culling import culling_figures
   qpos = scripted_rollout(setup, n_steps=5)  # still on the landing
-  base = jaguar_stairs.physics
-  checks = lambda **kw: gate.culling_checks(dataclasses.replace(base, **kw), jaguar_stairs, stairs, qpos, "r1")  # noqa: E731
+  base, figures = jaguar_stairs.physics, culling_figures(jaguar_stairs, stairs, qpos)
+  checks = lambda **kw: gate.culling_checks(dataclasses.replace(base, **kw), figures, "r1")  # noqa: E731
   assert all(c.ok for c in checks(box_pairs=40, contact_slots=48))
   narrow = checks(box_pairs=10, contact_slots=4)
   assert [c.ok for c in narrow] == [False, False] and narrow[1].value >= 10

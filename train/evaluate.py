@@ -135,18 +135,22 @@ def parser() -> argparse.ArgumentParser:
   return p
 
 
+def _policies(args, budgets: list[int | None], cfg: TaskConfig):
+  """({budget: (make_act, params, step)}, observe): the baseline's (it may read the whole state) or
+  the run's policy of each budget (it reads the observation)."""
+  if args.baseline:
+    return {None: _baseline_policy(args.baseline, cfg)}, (lambda s: s)
+  return {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}, (lambda s: s.obs)
+
+
 def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: TaskConfig) -> list[str]:
   """Runs one scene with the policy of each budget (one compilation); writes each report and its
   trials; returns the summary lines."""
   cfg = scene_config(cfg0, scene)
-  if args.baseline:
-    policies = {None: _baseline_policy(args.baseline, cfg)}
-  else:
-    policies = {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}
+  policies, observe = _policies(args, budgets, cfg)
   print(f"{scene}: compiling and running {args.trials} trials of up to {cfg.episode.max_steps} steps "
         f"({len(budgets)} polic{'y' if len(budgets) == 1 else 'ies'}; the first time on this machine takes "
         "a minute or more) ...", file=sys.stderr, flush=True)
-  observe = (lambda s: s) if args.baseline else (lambda s: s.obs)  # a baseline may read the whole state
   run = trial_runner(cfg, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video), observe)
   lines = []
   for budget, (_, params, policy_step) in policies.items():
@@ -164,14 +168,10 @@ def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: Tas
 def _evaluate_robustness(args, meta: dict, base: str, budgets: list[int | None], cfg0: TaskConfig) -> list[str]:
   """Every robustness case on scene `base` with the policy of each budget, in one batch and one
   compilation (robustness_runner); writes each case's report (scene BASE+CASE) and its trials."""
-  if args.baseline:
-    policies = {None: _baseline_policy(args.baseline, scene_config(cfg0, base))}
-  else:
-    policies = {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}
+  policies, observe = _policies(args, budgets, scene_config(cfg0, base))
   cases = [c.name for c in cfg0.evaluation.robustness]
   print(f"{base}: compiling and running {len(cases)} robustness cases x {args.trials} trials in one batch ...",
         file=sys.stderr, flush=True)
-  observe = (lambda s: s) if args.baseline else (lambda s: s.obs)
   run = robustness_runner(cfg0, base, policies[budgets[0]][0], args.trials, args.eps, args.seed, observe)
   lines = []
   for budget, (_, params, policy_step) in policies.items():

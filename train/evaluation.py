@@ -38,14 +38,13 @@ def perturbed(cfg: TaskConfig, case_name: str) -> TaskConfig:
   robustness case's overrides: one perturbation alone, whatever the policy trained with (and at
   any eps: grow off)."""
   from mjx_tracks.envs.config import apply_override, from_dict  # noqa: PLC0415
-  from mjx_tracks.envs.randomization import NOMINAL  # noqa: PLC0415
+  from mjx_tracks.envs.randomization import nominal_section  # noqa: PLC0415
   case = next((c for c in cfg.evaluation.robustness if c.name == case_name), None)
   if case is None:
     raise ConfigError(f"unknown robustness case {case_name!r}; evaluation.robustness has "
                       f"{', '.join(c.name for c in cfg.evaluation.robustness) or '(none)'}")
   raw = cfg.to_dict()
-  raw["randomization"].update({k: list(v) if isinstance(v, tuple) else v for k, v in NOMINAL.items()},
-                              enabled=True, grow=False)  # a case's values as written, whatever eps
+  raw["randomization"] = nominal_section(raw["randomization"])  # grow off: a case's values as written, whatever eps
   raw["observation"]["noise"] = 0.0
   for item in case.set:
     raw = apply_override(raw, item)
@@ -75,6 +74,26 @@ EVAL_SEED = 1  # their reset keys: jax.random.split(PRNGKey(EVAL_SEED), trials)
 EVAL_EPS = 1.0  # the difficulty handed to reset (pinned scenes such as hardest ignore it)
 
 
+def start_sums(state, trials: int) -> dict:
+  """Per-trial sums of a batch state before its first step: every METRICS sum and the length 0, the
+  final chassis position the start."""
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.metrics import STEP_NAMES  # noqa: PLC0415
+  return {**{k: jnp.zeros(trials) for k in STEP_NAMES}, "length": jnp.zeros(trials),
+          "final_pos": state.pipeline_state.data.qpos[:, :3]}
+
+
+def add_step(acc: dict, state, active):
+  """acc with one step of a batch state added for the trials still active (bool (trials,))."""
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mjx_tracks.metrics import STEP_NAMES  # noqa: PLC0415
+  a = active.astype(jnp.float32)
+  return {**{k: acc[k] + a * state.metrics[k] for k in STEP_NAMES}, "length": acc["length"] + a,
+          "final_pos": jnp.where(active[:, None], state.pipeline_state.data.qpos[:, :3], acc["final_pos"])}
+
+
 def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=lambda s: s.obs, core=None):
   """(core, rollout): the task env and a pure rollout(params, keys[, perturbations]) -> (sums, qpos
   of trial 0 per step, trial 0's scene), one episode per trial from `core.reset_at(key, eps)` (with
@@ -84,24 +103,20 @@ def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=la
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
-  from mjx_tracks.envs.task_env import METRICS, TrackedRobotEnv  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   core = TrackedRobotEnv(cfg) if core is None else core
 
   def rollout(params, keys, perturbations=None):
     act = make_act(params)
     s = jax.vmap(core.reset_at, in_axes=(0, None, None, 0))(keys, jnp.float32(eps), jnp.float32(1.0), perturbations)
-    acc0 = {**{k: jnp.zeros(trials) for k in METRICS}, "length": jnp.zeros(trials),
-            "final_pos": s.pipeline_state.data.qpos[:, :3]}
 
     def body(carry, _):
       s, acc, active = carry
       s = jax.vmap(core.step)(s, act(observe(s)))
-      a = active.astype(jnp.float32)
-      acc = {**{k: acc[k] + a * s.metrics[k] for k in METRICS}, "length": acc["length"] + a,
-             "final_pos": jnp.where(active[:, None], s.pipeline_state.data.qpos[:, :3], acc["final_pos"])}
-      return (s, acc, active & (s.done == 0)), s.pipeline_state.data.qpos[0]
+      return (s, add_step(acc, s, active), active & (s.done == 0)), s.pipeline_state.data.qpos[0]
 
-    (_, acc, _), qpos = jax.lax.scan(body, (s, acc0, jnp.ones(trials, bool)), None, length=cfg.episode.max_steps)
+    (_, acc, _), qpos = jax.lax.scan(body, (s, start_sums(s, trials), jnp.ones(trials, bool)), None,
+                                     length=cfg.episode.max_steps)
     scene0 = jax.tree_util.tree_map(lambda x: x[0], s.pipeline_state.scene)
     return acc, jnp.concatenate([s.pipeline_state.data.qpos[:1], qpos]), scene0
 
@@ -146,14 +161,13 @@ def robustness_runner(cfg: TaskConfig, base: str, make_act, trials: int, eps: fl
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
-  from mjx_tracks.envs.randomization import draw, perturbation_key  # noqa: PLC0415
+  from mjx_tracks.envs.randomization import task_draw  # noqa: PLC0415
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   names = [c.name for c in cfg.evaluation.robustness]
   cases = [scene_config(cfg, f"{base}{ROBUST}{name}") for name in names]
   core = TrackedRobotEnv(cases[0], every_path=True)
   keys = trial_keys(trials, seed)
-  perts = [jax.vmap(lambda k, c=c: draw(c.randomization, perturbation_key(k), jnp.float32(eps), core.sim.layout.n_joints,
-                                        c.observation.noise, c.control.period))(keys) for c in cases]
+  perts = [jax.vmap(lambda k, c=c: task_draw(c, k, jnp.float32(eps), core.sim.layout.n_joints))(keys) for c in cases]
   perts = jax.tree_util.tree_map(lambda *x: jnp.concatenate(x), *perts)
   _, rollout = trial_rollout(cases[0], make_act, trials * len(cases), eps, observe, core)
   compiled, all_keys = jax.jit(rollout), jnp.tile(keys, (len(cases), 1))

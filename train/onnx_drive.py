@@ -22,23 +22,17 @@ def drive(cfg, choose, trials: int, seed: int) -> dict:
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
-  from mjx_tracks.envs.task_env import METRICS, TrackedRobotEnv  # noqa: PLC0415
-  from train.evaluation import EVAL_EPS, per_trial_figures, trial_keys  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
+  from train.evaluation import EVAL_EPS, add_step, per_trial_figures, start_sums, trial_keys  # noqa: PLC0415
   core = TrackedRobotEnv(cfg)
   reset = jax.jit(jax.vmap(core.reset_at, in_axes=(0, None, None)))
-  step = jax.jit(jax.vmap(core.step))
+  step, add = jax.jit(jax.vmap(core.step)), jax.jit(add_step)
   s = reset(trial_keys(trials, seed), jnp.float32(EVAL_EPS), jnp.float32(1.0))
-  acc = {**{k: np.zeros(trials) for k in METRICS}, "length": np.zeros(trials),
-         "final_pos": np.asarray(s.pipeline_state.data.qpos[:, :3])}
-  active = np.ones(trials, bool)
+  acc, active = start_sums(s, trials), np.ones(trials, bool)
   for _ in range(cfg.episode.max_steps):
     action = np.asarray(choose(np.asarray(s.obs, np.float32)), np.float32)
     s = step(s, jnp.asarray(action))
-    a = active.astype(np.float64)
-    for k in METRICS:
-      acc[k] += a * np.asarray(s.metrics[k])
-    acc["length"] += a
-    acc["final_pos"] = np.where(active[:, None], np.asarray(s.pipeline_state.data.qpos[:, :3]), acc["final_pos"])
+    acc = add(acc, s, jnp.asarray(active))  # the trials the policy is still driving (the evaluator's sums)
     active &= np.asarray(s.done) == 0
     if not active.any():
       break

@@ -364,18 +364,22 @@ class RobustnessCase:
   set: tuple[str, ...]
 
   def validate(self, key: str) -> None:
-    """Each override names a randomization key (not enabled, grow) or observation.noise, with a value
-    of its type and range (the case's fit to a task's control period is checked when it runs)."""
-    from mjx_tracks.envs.randomization import NOMINAL  # noqa: PLC0415
+    """Each override names a randomization key (not enabled, grow) or observation.noise; their values
+    are checked against the task's sections (TaskConfig.validate: check_case)."""
     require_plain_name(self.name, f"{key}.name")
-    raw = {"randomization": {"enabled": True, "grow": False, "push_interval": 15.0, **NOMINAL},
-           "observation": {"noise": 0.0}}
     for item in self.set:
       require(isinstance(item, str) and item.startswith(PERTURBABLE) and item.partition("=")[0] not in
               ("randomization.enabled", "randomization.grow"), f"{key}.set",
               lambda: f"overrides of {' or '.join(PERTURBABLE)} keys (not enabled, grow), got {show(item)}")
-      raw = apply_override(raw, item)
+
+  def check_case(self, randomization: RandomizationConfig, key: str) -> None:
+    """Each override's value of its type and range, applied to the nominal robot of a task's
+    randomization section (the case's fit to its control period is checked when it runs)."""
+    from mjx_tracks.envs.randomization import nominal_section  # noqa: PLC0415
+    raw = {"randomization": nominal_section(dataclasses.asdict(randomization)), "observation": {"noise": 0.0}}
     try:
+      for item in self.set:
+        raw = apply_override(raw, item)
       parse_mapping(RandomizationConfig, raw["randomization"], "randomization").validate("randomization")
       require(0.0 <= raw["observation"]["noise"] < 1.0, "observation.noise", "must be in [0, 1)")
     except ConfigError as e:
@@ -447,6 +451,8 @@ class TaskConfig:
             lambda: f"{self.scene.kind} scenes have nothing to collide with (collisions: nav scenes)")
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
+    for i, case in enumerate(self.evaluation.robustness):
+      case.check_case(self.randomization, f"evaluation.robustness[{i}]")
     r = self.randomization  # its ranges act only where it is enabled
     require(not r.enabled or r.action_delay[1] <= round(steps), "randomization.action_delay",
             lambda: f"at most a control period, {round(steps)} substeps, got {list(r.action_delay)}")

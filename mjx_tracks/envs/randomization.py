@@ -77,6 +77,15 @@ NOMINAL = {"friction_along": (1.0, 1.0), "friction_across": (1.0, 1.0), "mass": 
            "action_delay": (0, 0), "period_jitter": 0, "imu_noise": (0.0, 0.0, 0.0),
            "imu_bias": (0.0, 0.0), "joint_noise": 0.0, "joint_bias": 0.0, "depth_noise": 0.0,
            "camera_pitch": (0.0, 0.0)}
+
+
+def nominal_section(section: dict) -> dict:
+  """A randomization section (plain mapping) as the nominal robot: every NOMINAL key at its value,
+  enabled, grow off (a robustness case's starting point)."""
+  return {**section, **{k: list(v) if isinstance(v, tuple) else v for k, v in NOMINAL.items()},
+          "enabled": True, "grow": False}
+
+
 # [min, max] keys: what their ends may be
 LIMITS = {"friction_along": (0.1, 3.0), "friction_across": (0.1, 3.0), "mass": (0.5, 2.0),
           "payload": (0.0, 20.0), "belt_gain": (0.5, 1.5), "servo_gain": (0.1, 3.0),
@@ -154,6 +163,12 @@ def draw(c: RandomizationConfig, key: jax.Array, eps: jax.Array, n_joints: int, 
       imu_bias=jnp.concatenate([sym(c.imu_bias[0], (2,)), rate_bias]), imu_noise=f(c.imu_noise),
       joint_bias=sym(c.joint_bias, (n_joints,)), joint_noise=f(c.joint_noise), depth_noise=f(c.depth_noise),
       hidden=jnp.float32(hidden), camera_pitch=u("camera_pitch"))
+
+
+def task_draw(cfg, rng: jax.Array, eps: jax.Array, n_joints: int) -> Perturbation:
+  """The episode's draw of a task config's randomization from the episode's reset key (its own
+  stream, perturbation_key): what TrackedRobotEnv.reset_at draws, and the robustness suite per case."""
+  return draw(cfg.randomization, perturbation_key(rng), eps, n_joints, cfg.observation.noise, cfg.control.period)
 
 
 @struct.dataclass

@@ -152,7 +152,7 @@ class TrackedRobotEnv(Env):
     scene = self.scene.sample(k_scene, eps)
     robust = None
     if self.randomized:  # its own stream: the paper's tasks draw as before
-      p = perturbation if perturbation is not None else self.draw_perturbation(rnd.perturbation_key(rng), eps)
+      p = perturbation if perturbation is not None else self.draw_perturbation(rng, eps)
       robust = rnd.RobustState(perturbation=p, belts=jnp.zeros(len(BELT_SIDE)))
     m = self._model(scene, robust)
     spawn, yaw, joints = self._start(scene, jax.random.fold_in(k_scene, 1))
@@ -168,9 +168,9 @@ class TrackedRobotEnv(Env):
     return State(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=zero, done=zero,
                  metrics=metrics, info={"eps": jnp.asarray(eps, jnp.float32)})
 
-  def draw_perturbation(self, key: jax.Array, eps: jax.Array) -> rnd.Perturbation:
-    """One episode's draw of the task's randomization (the nominal robot where it is off)."""
-    return rnd.draw(self.rand, key, eps, self.sim.layout.n_joints, self.cfg.observation.noise, self.cfg.control.period)
+  def draw_perturbation(self, rng: jax.Array, eps: jax.Array) -> rnd.Perturbation:
+    """The draw of the task's randomization for the episode of reset key rng (the nominal robot where it is off)."""
+    return rnd.task_draw(self.cfg, rng, eps, self.sim.layout.n_joints)
 
   # --- the physics of one control step ------------------------------------------------------
   def _model(self, scene: SceneState, robust: rnd.RobustState | None) -> mjx.Model:

@@ -176,7 +176,9 @@ def stair_checks(physics, robot: str) -> list[Check]:
       passed = s["goal_reached"] and not s["tipped_over"]
       if what == "hardest":
         out.append(Check(f"robot {robot} scripted {direction} hardest staircase", passed, "reached", passed))
-        out += culling_checks(physics, sim, sc.Staircase(tread, riser, steps), q, f"robot {robot} {direction}")
+        from mjx_tracks.sim.culling import culling_figures  # noqa: PLC0415
+        out += culling_checks(physics, culling_figures(sim, sc.Staircase(tread, riser, steps), q),
+                              f"robot {robot} {direction}")
       else:
         want = riser == STEP_BELOW
         out.append(Check(f"robot {robot} scripted single step {riser} m", passed,
@@ -184,11 +186,11 @@ def stair_checks(physics, robot: str) -> list[Check]:
   return out
 
 
-def culling_checks(physics, sim, stairs, qpos, what: str) -> list[Check]:
-  """Along a drive, the C engine's touching contacts fit physics.contact_slots and its touching
-  belt-box pairs are among the physics.box_pairs MJX tests (mjx_tracks.sim.culling); -1 keeps all."""
-  from mjx_tracks.sim.culling import culling_figures  # noqa: PLC0415
-  most, worst = culling_figures(sim, stairs, qpos)
+def culling_checks(physics, figures: tuple[int, int], what: str) -> list[Check]:
+  """Along a drive whose culling figures (mjx_tracks.sim.culling.culling_figures) are given, the C
+  engine's touching contacts fit physics.contact_slots and its touching belt-box pairs are among the
+  physics.box_pairs MJX tests; -1 keeps all (nothing to check)."""
+  most, worst = figures
   out = []
   if physics.contact_slots > 0:
     out.append(Check.at_most(f"{what}: most touching contacts (C engine)", most, physics.contact_slots))
