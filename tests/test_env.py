@@ -27,10 +27,10 @@ TERRAIN_SEED = 4
 # only), so every other task,
 # differing from one of them in those keys only (checked below), runs code they compile; a task
 # differing in a size as well (a box pool) is traced to check its shapes
-# (des-hard: the descent, with the episode_mean safety form; the paper's descent differs in data only)
+# (des-hard: the descent, with the episode_mean safety form and a goal bonus; the paper's descent differs in data only)
 RUN_TASKS = ("asc-inc-cog", "des-hard", "nav", "mixed-terrain", "asc-inc-cog-r2", "spiral-up")
 EXERCISED_KEYS = {"task", "scene.sampler", "reward.kind", "scene.direction", "scene.terrains", "episode.max_steps",
-                  "reward.safety_form", "reward.angular_scale", "scene.tread", "scene.riser",
+                  "reward.safety_form", "reward.angular_scale", "reward.goal_bonus", "scene.tread", "scene.riser",
                   "observation.noise"}  # hidden rays: tests/test_randomization.py compiles every randomization path
 SIZE_KEYS = {"scene.steps", "scene.nav_floor_obstacles", "randomization.enabled"}  # traced here: shapes or state change
 
