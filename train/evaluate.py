@@ -33,7 +33,7 @@ from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.evaluation import (EVAL_EPS, EVAL_SEED, EVAL_TRIALS, SCENES, fewer_trials_path, milestone_folder,
-                              ROBUST, report_path, robustness_runner, robustness_scenes, saved_milestones, scene_config, suite_scenes,
+                              ROBUST, report_path, robustness_bases, robustness_runner, robustness_scenes, saved_milestones, scene_config, suite_scenes,
                               trial_runner, trials_in)
 from train.core.run_record import read_run_record, run_id_in, write_run_record
 
@@ -219,8 +219,9 @@ def _summary(task: str, scene: str, budget: int | None, trials: int, per_trial: 
   return f"{task} {scene}{at}: {trials} trials, {', '.join(figures)} -> {out}"
 
 
-def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
-  """(scene, milestone budgets with None for the final policy) to evaluate; ValueError on bad input."""
+def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None], bool]]:
+  """(scene, milestone budgets with None for the final policy, whether the scene is a base scene of
+  the robustness suite: every case on it in one batch) to evaluate; ValueError on bad input."""
   if args.scene is not None and (args.suite or args.robustness):
     raise ValueError("--scene names one scene; --suite and --robustness name theirs: give one of them")
   scenes = suite_scenes(cfg) if args.suite else [] if args.robustness else [args.scene or "hardest"]
@@ -228,8 +229,7 @@ def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
     scene_config(cfg, scene)  # ConfigError on an unknown scene
   if args.robustness and (args.out or args.video):
     raise ValueError("--out and --video take one scene; --robustness writes a report per case")
-  robust = [f"{ROBUST}{base}" for base in dict.fromkeys(s.partition(ROBUST)[0] for s in robustness_scenes(cfg))] \
-      if args.robustness else []  # +BASE: every case on BASE in one batch
+  bases = robustness_bases(cfg) if args.robustness else []
   budgets: list[int | None] = [None]
   if args.baseline and (args.milestones or args.checkpoint is not None):
     raise ValueError("a baseline has no milestones nor checkpoints")
@@ -239,7 +239,7 @@ def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None]]]:
     budgets = [*saved_milestones(args.run_dir), None]
   if len(scenes) * len(budgets) > 1 and (args.out or args.video):
     raise ValueError("--out and --video take one scene and one policy")
-  return [(scene, budgets) for scene in scenes + robust]
+  return [(scene, budgets, False) for scene in scenes] + [(base, budgets, True) for base in bases]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -260,9 +260,8 @@ def main(argv: list[str] | None = None) -> int:
     else:
       meta = read_run_record(args.run_dir)
     cfg = from_dict(meta["config"])
-    for scene, budgets in _jobs(args, cfg):
-      robust = scene.startswith(ROBUST)
-      for line in (_evaluate_robustness(args, meta, scene[1:], budgets, cfg) if robust else
+    for scene, budgets, robust in _jobs(args, cfg):
+      for line in (_evaluate_robustness(args, meta, scene, budgets, cfg) if robust else
                    _evaluate(args, meta, scene, budgets, cfg)):
         print(line, flush=True)
   except (ConfigError, FileNotFoundError, ValueError) as e:

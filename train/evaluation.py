@@ -26,11 +26,14 @@ def suite_scenes(cfg: TaskConfig) -> list[str]:
 ROBUST = "+"  # BASE+CASE: an evaluation scene under one case of the robustness suite (evaluation.robustness)
 
 
+def robustness_bases(cfg: TaskConfig) -> list[str]:
+  """The scenes the robustness suite runs its cases on: hardest (where the task has one), uniform."""
+  return (["hardest"] if cfg.scene.has_hardest else []) + ["uniform"]
+
+
 def robustness_scenes(cfg: TaskConfig) -> list[str]:
-  """The robustness suite: every case of evaluation.robustness on the hardest scene (where the
-  task has one) and on uniform scenes."""
-  bases = (["hardest"] if cfg.scene.has_hardest else []) + ["uniform"]
-  return [f"{base}{ROBUST}{case.name}" for base in bases for case in cfg.evaluation.robustness]
+  """The robustness suite: every case of evaluation.robustness on each of robustness_bases."""
+  return [f"{base}{ROBUST}{case.name}" for base in robustness_bases(cfg) for case in cfg.evaluation.robustness]
 
 
 def perturbed(cfg: TaskConfig, case_name: str) -> TaskConfig:

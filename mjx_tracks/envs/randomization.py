@@ -8,7 +8,7 @@ from the nominal robot (NOMINAL) to the whole range as the curriculum's eps goes
 Where each draw acts:
   model (with_dynamics):    chassis mass and inertia, payload, centre of mass, contact friction of
                             everything but the belts, servo kp / kv, joint damping
-  track model (mu of Simulator.advance): the belts' friction along and across (mu_along, mu_across)
+  track model (mu_scale of Simulator.advance): the belts' friction along and across (mu_along, mu_across)
   control (belt_gains):     each side's belt speed gain
   substeps (TrackedRobotEnv._advance): action delay, control period jitter, pushes
   sensors (noisy_imu_and_joints, beams.depth_beams): IMU and joint noise and bias; depth range

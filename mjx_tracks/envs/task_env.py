@@ -189,7 +189,7 @@ class TrackedRobotEnv(Env):
       p = robust.perturbation
       k_push, k_period = jax.random.split(jax.random.fold_in(es.key, 11))  # beside the paper's stream
       belts = belts * rnd.belt_gains(p, BELT_SIDE)
-      late["mu"] = jnp.array([self.sim.tracks.mu_along, self.sim.tracks.mu_across]) * p.friction
+      late["mu_scale"] = p.friction
       if "timing" in self.acting:
         late.update(held=(robust.belts, es.targets), delay=p.delay)
         n = rnd.period_substeps(p, self.substeps, k_period)

@@ -22,10 +22,10 @@ SPAWN_CLEARANCE = 0.005  # m, the chassis spawns this far above resting height, 
 
 
 def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array,
-                     mu: jax.Array | None = None) -> mjx.Data:
-  """One physics substep: mjx.step with the belt contacts of the track model (belt friction mu:
-  (along, across), default the track model's)."""
-  return mjx_private.step(m, d, lambda m, d: apply_belt_contacts(m, d, tm, belt_speeds, mu),
+                     mu_scale: jax.Array | None = None) -> mjx.Data:
+  """One physics substep: mjx.step with the belt contacts of the track model (its belt friction
+  (along, across) times mu_scale where given)."""
+  return mjx_private.step(m, d, lambda m, d: apply_belt_contacts(m, d, tm, belt_speeds, mu_scale),
                           lambda m, d, slip: aref_shift(m, d, tm, slip))
 
 
@@ -93,9 +93,10 @@ class Simulator:
       d = d.replace(ctrl=joint_angles)
     return d.replace(qpos=qpos)
 
-  def substep(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, mu: jax.Array | None = None) -> mjx.Data:
+  def substep(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array,
+              mu_scale: jax.Array | None = None) -> mjx.Data:
     """One physics step of timestep seconds with the given belt speeds (m/s, order of BELTS)."""
-    return step_with_tracks(m, d, self.tracks, belt_speeds, mu)
+    return step_with_tracks(m, d, self.tracks, belt_speeds, mu_scale)
 
   def advance(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, joint_targets: jax.Array,
               n_substeps, **late) -> mjx.Data:
@@ -107,11 +108,11 @@ class Simulator:
     """advance(), and whether any of its substeps' contacts was a collision (watch.touching)."""
     return self._run(m, d, belt_speeds, joint_targets, n_substeps, watch, **late)
 
-  def _run(self, m, d, belts, targets, n_substeps, watch: CollisionWatch | None, mu: jax.Array | None = None,
+  def _run(self, m, d, belts, targets, n_substeps, watch: CollisionWatch | None, mu_scale: jax.Array | None = None,
            held: tuple[jax.Array, jax.Array] | None = None, delay=0) -> tuple[mjx.Data, jax.Array]:
     """n_substeps (an int, or traced: a jittered period) physics steps with the command (belt speeds
     m/s, joint targets rad); held: the previous command's (belt speeds, joint targets), which act
-    for the first `delay` substeps (a late command); mu: the belts' friction (along, across)."""
+    for the first `delay` substeps (a late command); mu_scale: (2,) x the belts' friction (along, across)."""
     def substep(i, carry):
       x, hit = carry
       b = belts
@@ -119,7 +120,7 @@ class Simulator:
         late = i < delay
         b = jnp.where(late, held[0], belts)
         x = x.replace(ctrl=jnp.where(late, held[1], targets))
-      x = self.substep(m, x, b, mu)
+      x = self.substep(m, x, b, mu_scale)
       return x, (hit | watch.touching(x)) if watch is not None else hit
     return jax.lax.fori_loop(0, n_substeps, substep, (d.replace(ctrl=targets), jnp.bool_(False)))
 

@@ -105,9 +105,9 @@ def contact_belt_velocity(m, d, tm: TrackModel, belt_speeds: jax.Array):
   return on_belt, sign, u_dir, speed[:, None] * u_dir + skid
 
 
-def apply_belt_contacts(m, d, tm: TrackModel, belt_speeds: jax.Array, mu: jax.Array | None = None):
-  """Turns belt contacts' frames and friction (mu: (along, across), default the track model's);
-  returns (data, per-contact target slips (ncon, 2))."""
+def apply_belt_contacts(m, d, tm: TrackModel, belt_speeds: jax.Array, mu_scale: jax.Array | None = None):
+  """Turns belt contacts' frames and friction ((mu_along, mu_across), each times mu_scale (2,) where
+  given: a randomized episode's); returns (data, per-contact target slips (ncon, 2))."""
   c = mjx_private.contacts(d)
   on_belt, sign, u_dir, target = contact_belt_velocity(m, d, tm, belt_speeds)
   n = c.frame[:, 0]
@@ -115,7 +115,8 @@ def apply_belt_contacts(m, d, tm: TrackModel, belt_speeds: jax.Array, mu: jax.Ar
   valid = on_belt & (t1_norm > 1e-3)  # a belt seen edge-on (side face) keeps isotropic friction
   t2 = jnp.cross(n, t1)
   frame = jnp.where(valid[:, None, None], jnp.stack([n, t1, t2], axis=1), c.frame)
-  mu = jnp.array([tm.mu_along, tm.mu_across]) if mu is None else mu
+  mu = jnp.array([tm.mu_along, tm.mu_across])
+  mu = mu if mu_scale is None else mu * mu_scale
   friction = jnp.where(valid[:, None], c.friction.at[:, :2].set(mu), c.friction)
   u_vec = sign[:, None] * target
   slip = jnp.stack([jnp.sum(u_vec * t1, -1), jnp.sum(u_vec * t2, -1)], axis=-1)
