@@ -13,6 +13,7 @@ import numpy as np
 from mjx_tracks.metrics import EPISODE_NAMES, REPORT_NAMES
 from train.db import ExperimentDB
 from train.core.run_record import run_id_in
+from train.evaluation import ROBUST
 from train.study.executor import STUDY_DB, cell_folder_of, read_cells
 from train.study.spec import BASELINE_GROUP, Cell, StudySpec, cells, load_study
 
@@ -59,7 +60,7 @@ class StudyResults:
   def scenes(self, robustness: bool = False) -> list[str]:
     """Evaluation scenes of the finished runs: hardest, uniform, then the others by name; those of
     the robustness suite (BASE+CASE, train.evaluation.ROBUST) only with robustness=True."""
-    found = {e["scene"] for r in self.runs for e in r.evals if robustness or "+" not in e["scene"]}
+    found = {e["scene"] for r in self.runs for e in r.evals if robustness or ROBUST not in e["scene"]}
     first = [s for s in ("hardest", "uniform") if s in found]
     return first + sorted(found - set(first))
 
