@@ -20,8 +20,7 @@ def test_the_onnx_policy_matches_the_jax_policy_and_carries_its_layout(ppo_run, 
   # parity again, independently of the command: the file's actions against the JAX policy's
   fn, spec, params, _ = export.policy_function(run_dir)
   obs = export.parity_observations(params, 1000, seed=7)
-  with open(path, "rb") as f:
-    got = export.onnx_actions(f.read(), obs)
+  got = export.onnx_policy(path)(obs)
   np.testing.assert_allclose(got, np.asarray(fn(obs)), atol=1e-5)
   assert np.abs(got).max() <= 1.0 and got.std() > 0  # actions in [-1, 1] that depend on the observation
   with open(os.path.join(run_dir, "run.json")) as f:

@@ -20,6 +20,7 @@ import argparse
 import json
 import os
 import sys
+import tempfile
 
 import numpy as np
 
@@ -81,11 +82,12 @@ def convert(fn, observation_size: int):
                  input_names=["observation"], output_names=["action"])
 
 
-def onnx_actions(model_bytes: bytes, observations: np.ndarray) -> np.ndarray:
-  """The actions onnxruntime computes for a batch of observations (CPU)."""
+def onnx_policy(model: bytes | str):
+  """act(observations (B, n) float32) -> actions (B, k) by onnxruntime on the CPU, from an exported
+  model's bytes or file."""
   import onnxruntime as ort  # noqa: PLC0415
-  session = ort.InferenceSession(model_bytes, providers=["CPUExecutionProvider"])
-  return session.run(["action"], {"observation": observations})[0]
+  session = ort.InferenceSession(model, providers=["CPUExecutionProvider"])
+  return lambda observations: session.run(["action"], {"observation": observations})[0]
 
 
 def export(run_dir: str, path: str, checkpoint: str | None = None, tolerance: float = TOLERANCE) -> dict:
@@ -100,7 +102,7 @@ def export(run_dir: str, path: str, checkpoint: str | None = None, tolerance: fl
   fn, spec, params, step = policy_function(run_dir, checkpoint)
   model = convert(fn, spec.observation_size)
   obs = parity_observations(params, PARITY_OBSERVATIONS)
-  diff = float(np.max(np.abs(onnx_actions(model.SerializeToString(), obs) - np.asarray(fn(obs)))))
+  diff = float(np.max(np.abs(onnx_policy(model.SerializeToString())(obs) - np.asarray(fn(obs)))))
   parity = {"observations": PARITY_OBSERVATIONS, "max_abs_difference": diff, "tolerance": tolerance,
             "drawn_from": "the policy's normalizer: mean + std x N(0, 1), seed 0"}
   if not diff <= tolerance:
@@ -111,7 +113,6 @@ def export(run_dir: str, path: str, checkpoint: str | None = None, tolerance: fl
            "task": meta["task"], "run_id": meta["run_id"], "policy_step": step, "config": meta["config"],
            "parity": parity}
   onnx.helper.set_model_props(model, {META + k: json.dumps(v) for k, v in props.items()})
-  import tempfile  # noqa: PLC0415
   fd, tmp = tempfile.mkstemp(suffix=".onnx.tmp", dir=os.path.dirname(os.path.abspath(path)))
   os.close(fd)
   try:

@@ -11,6 +11,7 @@ and both lines are printed: a closed-loop check of the export.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 import numpy as np
@@ -41,11 +42,8 @@ def drive(cfg, choose, trials: int, seed: int) -> dict:
 
 def onnx_chooser(path: str):
   """choose(observations) -> actions by onnxruntime (CPU), and the file's metadata."""
-  import onnxruntime as ort  # noqa: PLC0415
-
-  from train.export import read_metadata  # noqa: PLC0415
-  session = ort.InferenceSession(path, providers=["CPUExecutionProvider"])
-  return (lambda obs: session.run(["action"], {"observation": obs})[0]), read_metadata(path)
+  from train.export import onnx_policy, read_metadata  # noqa: PLC0415
+  return onnx_policy(path), read_metadata(path)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -72,9 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     runs = {"onnxruntime": choose}
     if args.compare:
       from train.core.policy import load_policy  # noqa: PLC0415
-      import os  # noqa: PLC0415
-      act = load_policy(os.path.join(args.compare, "policy"))
-      runs["jax"] = lambda obs: act(obs)
+      runs["jax"] = load_policy(os.path.join(args.compare, "policy"))
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
