@@ -234,10 +234,15 @@ def test_a_task_file_extends_another_and_robustness_cases_are_checked_on_load(tm
     with pytest.raises(ConfigError, match="robustness"):
       load_config("asc-inc-cog", [f'evaluation.robustness=[{{name: x, set: ["{bad}"]}}]'])
   with pytest.raises(ConfigError, match="action_delay"):  # a control period of 10 substeps
-    scene_config(load_config("asc-inc-cog", ["control.period=0.1"]), "hardest+latency-period")
+    load_config("asc-inc-cog-robust", ["control.period=0.1", "randomization.action_delay=[0, 25]"])
+  # `period` is the task's own control period: 10 substeps at 0.1 s, 25 at the paper's 0.25 s
+  short = load_config("asc-inc-cog-robust", ["control.period=0.1"])
+  assert short.randomization.action_delay == (0, 10)
+  assert scene_config(short, "hardest+latency-period").randomization.action_delay == (10, 10)
+  assert scene_config(load_config("asc-inc-cog"), "hardest+latency-period").randomization.action_delay == (25, 25)
   case = scene_config(load_config("asc-inc-cog-robust", ["randomization.grow=true"]), "hardest+friction-low")
   r = case.randomization
-  assert (r.enabled, r.grow, r.friction_along, r.mass, case.observation.noise) == (True, False, (0.5, 0.5), (1.0, 1.0), 0.0)
+  assert (r.enabled, r.grow, r.friction_along, r.mass, case.observation.noise) == (True, False, (0.8, 0.8), (1.0, 1.0), 0.0)
 
 
 def test_servo_gain_and_damping_reach_the_model(jaguar_stairs):

@@ -372,15 +372,17 @@ class RobustnessCase:
               ("randomization.enabled", "randomization.grow"), f"{key}.set",
               lambda: f"overrides of {' or '.join(PERTURBABLE)} keys (not enabled, grow), got {show(item)}")
 
-  def check_case(self, randomization: RandomizationConfig, key: str) -> None:
+  def check_case(self, randomization: RandomizationConfig, substeps: int, key: str) -> None:
     """Each override's value of its type and range, applied to the nominal robot of a task's
-    randomization section (the case's fit to its control period is checked when it runs)."""
-    from mjx_tracks.envs.randomization import nominal_section  # noqa: PLC0415
+    randomization section whose control period lasts `substeps` (the case's fit to it is checked
+    when it runs)."""
+    from mjx_tracks.envs.randomization import nominal_section, resolve_period  # noqa: PLC0415
     raw = {"randomization": nominal_section(dataclasses.asdict(randomization)), "observation": {"noise": 0.0}}
     try:
       for item in self.set:
         raw = apply_override(raw, item)
-      parse_mapping(RandomizationConfig, raw["randomization"], "randomization").validate("randomization")
+      section = resolve_period(raw["randomization"], substeps)
+      parse_mapping(RandomizationConfig, section, "randomization").validate("randomization")
       require(0.0 <= raw["observation"]["noise"] < 1.0, "observation.noise", "must be in [0, 1)")
     except ConfigError as e:
       raise ConfigError(f"{key}.set: {e}", e.key) from None
@@ -452,7 +454,7 @@ class TaskConfig:
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
     for i, case in enumerate(self.evaluation.robustness):
-      case.check_case(self.randomization, f"evaluation.robustness[{i}]")
+      case.check_case(self.randomization, round(steps), f"evaluation.robustness[{i}]")
     r = self.randomization  # its ranges act only where it is enabled
     require(not r.enabled or r.action_delay[1] <= round(steps), "randomization.action_delay",
             lambda: f"at most a control period, {round(steps)} substeps, got {list(r.action_delay)}")
@@ -624,9 +626,20 @@ def _with_added_keys(raw: dict) -> dict:
   return raw
 
 
+def _with_period_resolved(raw: dict) -> dict:
+  """randomization.action_delay's `period` (randomization.PERIOD) as the task's control period in
+  substeps; left as written where the period or timestep is not a number (the build names the key)."""
+  from mjx_tracks.envs.randomization import resolve_period  # noqa: PLC0415
+  period = (raw.get("control") or {}).get("period") if isinstance(raw.get("control"), dict) else None
+  dt = (raw.get("physics") or {}).get("timestep") if isinstance(raw.get("physics"), dict) else None
+  if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in (period, dt)):
+    return raw
+  return {**raw, "randomization": resolve_period(raw.get("randomization"), round(period / dt))}
+
+
 def from_dict(raw: dict) -> TaskConfig:
   """Builds and validates a TaskConfig from a complete plain mapping (e.g. a run's run.json)."""
-  cfg = _build(TaskConfig, _with_added_keys(raw), "")
+  cfg = _build(TaskConfig, _with_period_resolved(_with_added_keys(raw)), "")
   cfg.validate()
   return cfg
 

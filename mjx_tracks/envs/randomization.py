@@ -79,6 +79,18 @@ NOMINAL = {"friction_along": (1.0, 1.0), "friction_across": (1.0, 1.0), "mass": 
            "camera_pitch": (0.0, 0.0)}
 
 
+PERIOD = "period"  # in action_delay's YAML: one control period of the task, in substeps (control.period / physics.timestep)
+
+
+def resolve_period(section: dict, substeps: int) -> dict:
+  """A randomization section (plain mapping) with PERIOD in action_delay read as the task's control
+  period in substeps, so that a range or a robustness case follows any task's period."""
+  delay = section.get("action_delay") if isinstance(section, dict) else None
+  if not isinstance(delay, (list, tuple)) or PERIOD not in delay:
+    return section
+  return {**section, "action_delay": [substeps if d == PERIOD else d for d in delay]}
+
+
 def nominal_section(section: dict) -> dict:
   """A randomization section (plain mapping) as the nominal robot: every NOMINAL key at its value,
   enabled, grow off (a robustness case's starting point)."""
