@@ -12,6 +12,7 @@ EXTRAS = {
     "studies": ("distributed", "rliable", "arch", "pandas", "matplotlib"),
     "server": ("fastapi", "uvicorn", "plotly", "distributed", "rliable"),  # it launches studies, compares runs
     "export": ("jax2onnx", "onnx", "onnxruntime"),  # train.export, train.onnx_drive
+    "sb3": ("stable_baselines3", "torch"),  # train.run --library sb3
 }
 
 

@@ -27,7 +27,7 @@ from mjx_tracks.envs.config import ConfigError
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
-from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
+from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RESUMABLE, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
 
@@ -36,8 +36,9 @@ def parser() -> argparse.ArgumentParser:
   p = argparse.ArgumentParser(prog="python -m train.run", description=__doc__.splitlines()[0],
                               formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
   p.add_argument("--task", help="task name (configs/TASK.yaml)")
-  p.add_argument("--algo", choices=("ppo", "sac"), help="default ppo")
-  p.add_argument("--preset", help="cpu | gpu (| paper for sac); default from the JAX backend")
+  p.add_argument("--algo", choices=("ppo", "sac", "td3"), help="default ppo (with --library sb3: sac); td3 with --library sb3 only")
+  p.add_argument("--preset", help="cpu | gpu (| paper for sac; every algorithm with --library sb3); default from the "
+                                  "JAX backend (with --library sb3: paper)")
   p.add_argument("--num-envs", type=int, help="parallel environments, a multiple of the device count "
                                                 "(default: the preset's)")
   p.add_argument("--steps", type=int, help="total environment steps (default: the preset's)")
@@ -91,25 +92,19 @@ def _start_records(plan: RunPlan, db_path: str | None):
 def _train(plan: RunPlan, args) -> int:
   """Prepares the run (a resume restores its checkpoint before any record is touched), starts its
   records, trains, and closes them; returns the exit code."""
-  if plan.library != DEFAULT_LIBRARY:
+  if plan.library not in RESUMABLE:
     return _train_elsewhere(plan, args)
   from train.core.interrupts import StopRequest  # noqa: PLC0415
-  from train.core.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
-  early = f", early stop at {plan.early_stop}" if plan.early_stop else ""
-  print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
-        f"{device_summary()}, {plan.total_steps:,} steps{early} -> {plan.out_dir}", flush=True)
-  options = SessionOptions(args.checkpoint_every, args.keep_checkpoints)
   with StopRequest() as stop:
     try:
-      prepared = prepare(plan, options)
+      plan, session = (_sb3_session if plan.library == "sb3" else _own_session)(plan, args, stop)
     except RunError as e:
       print(f"error: {e}", file=sys.stderr)
       return 2
-    plan = prepared.t.plan
     db = _start_records(plan, args.db)
     status, final = "crashed", {}
     try:
-      final = train(prepared, db, stop, options)
+      final = session(db)
       status = STATUS[final["reason"]]
     finally:
       db.finish(plan.run_id, status, final, final.get("step"), _detail(status, stop, plan))
@@ -119,6 +114,27 @@ def _train(plan: RunPlan, args) -> int:
     return stop.exit_code
   print(finished_lines(plan, final, getattr(db, "path", None)), flush=True)
   return 0
+
+
+def _own_session(plan: RunPlan, args, stop):
+  """(plan, train(db) -> final) of this project's trainer, its state built or restored."""
+  from train.core.session import SessionOptions, device_summary, prepare, train  # noqa: PLC0415
+  early = f", early stop at {plan.early_stop}" if plan.early_stop else ""
+  print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
+        f"{device_summary()}, {plan.total_steps:,} steps{early} -> {plan.out_dir}", flush=True)
+  options = SessionOptions(args.checkpoint_every, args.keep_checkpoints)
+  prepared = prepare(plan, options)
+  return prepared.t.plan, lambda db: train(prepared, db, stop, options)
+
+
+def _sb3_session(plan: RunPlan, args, stop):
+  """(plan, train(db) -> final) of Stable-Baselines3 (train.core.sb3_trainer)."""
+  from train.extras import require_extra  # noqa: PLC0415
+  require_extra("sb3", "--library sb3")
+  from train.core import sb3_trainer  # noqa: PLC0415
+  print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset) by Stable-Baselines3, {plan.num_envs} envs, "
+        f"{plan.total_steps:,} steps -> {plan.out_dir}", flush=True)
+  return plan, lambda db: sb3_trainer.train(plan, db, stop, args.checkpoint_every, args.keep_checkpoints)
 
 
 def _train_elsewhere(plan: RunPlan, args) -> int:
@@ -161,7 +177,7 @@ def finished_lines(plan: RunPlan, final: dict, db_path: str | None) -> str:
       f"done{why}: {final['step']:,} steps in {final.get('wall_s', 0):,.0f} s"
       + (f"; last training episodes: {figures}" if figures else ""),  # --library brax reports none
       f"made: {out}/ with policy/ (the exported policy), "
-      + ("checkpoints/, run.json, tb/ (TensorBoard)" if plan.library == DEFAULT_LIBRARY else "run.json")
+      + ("checkpoints/, run.json, tb/ (TensorBoard)" if plan.library in RESUMABLE else "run.json")
       + (f"; records in {db_path}" if db_path else ""),
       "next:",
       f"  python -m train.evaluate {out} --scene hardest --trials 10   # the policy on the task's hardest scene",

@@ -11,6 +11,9 @@ from brax.training.agents.ppo import networks as ppo_networks
 from brax.training.agents.sac import networks as sac_networks
 
 
+ACTIVATIONS = {"relu": jax.nn.relu, "swish": jax.nn.swish, "tanh": jax.numpy.tanh}
+
+
 @dataclasses.dataclass(frozen=True)
 class NetworkSpec:
   algo: str  # "ppo" | "sac"
@@ -19,6 +22,8 @@ class NetworkSpec:
   policy_hidden: tuple[int, ...]
   value_hidden: tuple[int, ...]  # PPO value / SAC Q network
   normalize_observations: bool = True
+  activation: str = ""  # ACTIVATIONS; "": Brax's default of the family (PPO swish, SAC relu)
+  distribution: str = "tanh_normal"  # PPO: "normal" acts with the mean as is (SB3's PPO; the env clips)
 
   def to_json(self) -> dict:
     return dataclasses.asdict(self)
@@ -26,15 +31,17 @@ class NetworkSpec:
   @staticmethod
   def from_json(d: dict) -> "NetworkSpec":
     return NetworkSpec(d["algo"], d["observation_size"], d["action_size"], tuple(d["policy_hidden"]),
-                       tuple(d["value_hidden"]), d.get("normalize_observations", True))
+                       tuple(d["value_hidden"]), d.get("normalize_observations", True), d.get("activation", ""),
+                       d.get("distribution", "tanh_normal"))
 
   def factory(self):
     """The network_factory argument of brax's train()."""
+    own = {"activation": ACTIVATIONS[self.activation]} if self.activation else {}
     if self.algo == "ppo":
       return functools.partial(ppo_networks.make_ppo_networks,
                                policy_hidden_layer_sizes=self.policy_hidden,
-                               value_hidden_layer_sizes=self.value_hidden)
-    return functools.partial(sac_networks.make_sac_networks, hidden_layer_sizes=self.policy_hidden)
+                               value_hidden_layer_sizes=self.value_hidden, distribution_type=self.distribution, **own)
+    return functools.partial(sac_networks.make_sac_networks, hidden_layer_sizes=self.policy_hidden, **own)
 
   def build(self):
     preprocess = running_statistics.normalize if self.normalize_observations else (lambda x, y: x)

@@ -26,7 +26,10 @@ LIBRARIES = {
     "mjx-tracks": "this project's trainer (train/core): checkpoints, resume, probes, early stop, milestones",
     "brax": "Brax's own ppo.train / sac.train on the same env and preset: no checkpoints, resume, probes, "
             "early stop or milestones (the parity reference)",
+    "sb3": "Stable-Baselines3's SAC / TD3 / PPO (the [sb3] extra) on the task's Gymnasium VectorEnv, with its own "
+           "presets (train/core/sb3_presets.py): checkpoints and resume, no probes, early stop or milestones",
 }
+RESUMABLE = ("mjx-tracks", "sb3")  # libraries whose runs save checkpoints
 DEFAULT_LIBRARY = "mjx-tracks"
 
 
@@ -52,10 +55,13 @@ class RunPlan:
   library: str = DEFAULT_LIBRARY  # LIBRARIES
 
 
-def default_preset(algo: str) -> str:
+def default_preset(algo: str, library: str = DEFAULT_LIBRARY) -> str:
   """The preset a run gets without --preset: gpu on an accelerator; on the CPU, the preset that
-  solves the flagship task within 10 minutes on 2 cores (ppo) or the small one (sac)."""
+  solves the flagship task within 10 minutes on 2 cores (ppo) or the small one (sac); with
+  --library sb3, its paper preset (one robot)."""
   import jax  # noqa: PLC0415
+  if library == "sb3":
+    return "paper"
   if jax.default_backend() in ("gpu", "cuda", "rocm", "tpu"):
     return "gpu"
   return CPU_DEFAULT.get(algo, "cpu")
@@ -76,8 +82,9 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
     meta = read_run_record(args.resume)
   except (FileNotFoundError, ValueError) as e:
     raise RunError(f"--resume {args.resume}: {e}") from None
-  if meta.get("library", DEFAULT_LIBRARY) != DEFAULT_LIBRARY:
-    raise RunError(f"run {meta['run_id']} was trained by --library {meta['library']}, which saves no checkpoints: "
+  library = meta.get("library", DEFAULT_LIBRARY)
+  if library not in RESUMABLE:
+    raise RunError(f"run {meta['run_id']} was trained by --library {library}, which saves no checkpoints: "
                    "nothing to resume; train it again")
   total = meta["total_steps"] if args.steps is None else args.steps
   if not 1 <= total <= MAX_STEPS:
@@ -92,7 +99,7 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
                    f"it further: --resume {args.resume} --steps N with N > {done:,}")
   hp = tuple(meta.get("hp") or ())  # runs from before --hp recorded none
   try:
-    preset = with_hyperparams(get_preset(meta["algo"], meta["preset"]), hp)
+    preset = with_hyperparams(get_preset(meta["algo"], meta["preset"], library), hp)
   except ValueError as e:
     raise RunError(f"--resume {args.resume}: its run.json's {e}") from None
   preset = dataclasses.replace(preset, num_envs=meta["num_envs"])
@@ -101,7 +108,7 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   return RunPlan(meta["run_id"], os.path.abspath(args.resume), meta["task"], meta["algo"], meta["preset"],
                  preset, meta["seed"], tuple(meta["overrides"]), cfg, total, meta["num_envs"], True,
                  _early_stop_of(meta, cfg), meta.get("probe_every", 0), done,
-                 tuple(meta.get("milestones") or ()), hp)
+                 tuple(meta.get("milestones") or ()), hp, library)
 
 
 def _early_stop_of(meta: dict, cfg) -> EarlyStop | None:
@@ -150,10 +157,13 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     return _plan_resume(args)
   if not args.task:
     raise RunError("--task is required (or --resume DIR)")
-  algo, seed = args.algo or "ppo", 0 if args.seed is None else args.seed
-  preset_name = args.preset or default_preset(algo)
+  library = getattr(args, "library", None) or DEFAULT_LIBRARY
+  if library not in LIBRARIES:
+    raise RunError(f"--library {library!r}: one of {', '.join(LIBRARIES)}")
+  algo, seed = args.algo or ("sac" if library == "sb3" else "ppo"), 0 if args.seed is None else args.seed
+  preset_name = args.preset or default_preset(algo, library)
   try:
-    preset = with_hyperparams(get_preset(algo, preset_name), args.hp)
+    preset = with_hyperparams(get_preset(algo, preset_name, library), args.hp)
   except ValueError as e:
     raise RunError(str(e))
   overrides = tuple(preset.config_overrides) + tuple(args.set)
@@ -177,7 +187,6 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
     early = _early_stop(args.early_stop, preset, cfg)
   except ValueError as e:
     raise RunError(str(e))
-  library = getattr(args, "library", None) or DEFAULT_LIBRARY
   if library != DEFAULT_LIBRARY:
     early, probe_every, milestones = _library_limits(library, args, early)
   else:
@@ -192,14 +201,12 @@ def _library_limits(library: str, args: argparse.Namespace, early: EarlyStop | N
   """(early stop, probe interval, milestones) of a run another library trains: none of them; asking
   for one is refused (the preset's own early stop is dropped)."""
   from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP  # noqa: PLC0415  (orbax: only for these runs)
-  if library not in LIBRARIES:
-    raise RunError(f"--library {library!r}: one of {', '.join(LIBRARIES)}")
   given = [f"--{n.replace('_', '-')}" for n in ("probe_every", "milestones", "coordinator")
            if getattr(args, n, None) not in (None, 0, "")]
   if args.early_stop not in (None, NO_EARLY_STOP):
     given.append("--early-stop")
   given += [f"--{n.replace('_', '-')}" for n, default in (("checkpoint_every", CHECKPOINT_EVERY_S), ("keep_checkpoints", KEEP))
-            if getattr(args, n, default) != default]  # it saves none
+            if getattr(args, n, default) != default and library not in RESUMABLE]  # it saves none
   if given:
     raise RunError(f"--library {library} trains with {LIBRARIES[library]}; drop {', '.join(given)}")
   return None, 0, ()

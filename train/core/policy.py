@@ -49,7 +49,8 @@ def act_from_params(spec: NetworkSpec, deterministic: bool = True):
   one compilation serves every checkpoint of a run."""
   inference = spec.make_inference_fn()
   key = jax.random.PRNGKey(0)  # ignored by the deterministic policy; a stochastic one samples with it every call
-  return lambda params: (lambda obs: inference(params, deterministic=deterministic)(obs, key)[0])
+  # actions in [-1, 1] whatever the network's output (a "normal" PPO's mean is not squashed)
+  return lambda params: (lambda obs: jax.numpy.clip(inference(params, deterministic=deterministic)(obs, key)[0], -1, 1))
 
 
 def make_act(spec: NetworkSpec, params, deterministic: bool = True):

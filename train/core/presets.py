@@ -97,12 +97,24 @@ PRESETS: dict[str, dict[str, object]] = {
 CPU_DEFAULT = {"ppo": "laptop", "sac": "cpu"}  # the preset a run on the CPU gets without --preset
 
 
-def get_preset(algo: str, name: str):
-  if algo not in PRESETS:
-    raise ValueError(f"unknown algorithm {algo!r}; known: {sorted(PRESETS)}")
-  if name not in PRESETS[algo]:
-    raise ValueError(f"unknown preset {name!r} for {algo}; known: {sorted(PRESETS[algo])}")
-  return PRESETS[algo][name]
+SB3 = "sb3"  # the library whose presets are train/core/sb3_presets.py (the others train with these)
+
+
+def presets_of(library: str | None = None) -> dict[str, dict[str, object]]:
+  """{algo: {name: preset}} of a library's trainer (train.run --library)."""
+  if library == SB3:
+    from train.core import sb3_presets  # noqa: PLC0415
+    return sb3_presets.PRESETS
+  return PRESETS
+
+
+def get_preset(algo: str, name: str, library: str | None = None):
+  presets = presets_of(library)
+  if algo not in presets:
+    raise ValueError(f"unknown algorithm {algo!r}{f' for --library {library}' if library else ''}; known: {sorted(presets)}")
+  if name not in presets[algo]:
+    raise ValueError(f"unknown preset {name!r} for {algo}; known: {sorted(presets[algo])}")
+  return presets[algo][name]
 
 
 # fields --hp may not set: each has its own option, or is not a number
@@ -110,7 +122,7 @@ HP_ELSEWHERE = {"num_envs": "--num-envs", "num_timesteps": "--steps", "config_ov
                 "early_stop": "--early-stop"}
 
 HP_ZERO_OK = {"probe_steps"}  # whole-number fields where 0 means none; the others count from 1
-HP_AT_MOST_ONE = {"discounting", "gae_lambda", "tau", "clipping_epsilon"}
+HP_AT_MOST_ONE = {"discounting", "gae_lambda", "tau", "clipping_epsilon", "gamma", "clip_range"}
 HP_POSITIVE = {"learning_rate", "reward_scaling", "max_grad_norm", "tau"}  # 0 would train nothing
 
 

@@ -32,11 +32,13 @@ def tasks() -> list[str]:
 
 @router.get("/trainers")
 def trainers() -> dict:
-  """{algos: {algo: [preset, ...]}, libraries: {name: what it trains with}, default_library}: the
-  form's choices, from train.core's presets and libraries."""
+  """{algos: {algo: [preset, ...]} (the default library's), library_algos: {library: {algo: [preset,
+  ...]}}, libraries: {name: what it trains with}, default_library}: the form's choices, from
+  train.core's presets and libraries."""
   from train.core.plan import DEFAULT_LIBRARY, LIBRARIES  # noqa: PLC0415
-  from train.core.presets import PRESETS  # noqa: PLC0415
-  return {"algos": {a: list(p) for a, p in PRESETS.items()}, "libraries": LIBRARIES, "default_library": DEFAULT_LIBRARY}
+  from train.core.presets import presets_of  # noqa: PLC0415
+  per = {lib: {a: list(p) for a, p in presets_of(lib).items()} for lib in LIBRARIES}
+  return {"algos": per[DEFAULT_LIBRARY], "library_algos": per, "libraries": LIBRARIES, "default_library": DEFAULT_LIBRARY}
 
 
 @router.get("/schema/{task}")

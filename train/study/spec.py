@@ -112,7 +112,7 @@ def _group(raw, i: int) -> GroupSpec:
   g = parse_mapping(GroupSpec, {**GROUP_DEFAULTS, **raw}, key)
   require_plain_name(g.name, f"{key}.name")
   try:
-    with_hyperparams(get_preset(g.algo, g.preset), g.hp)
+    with_hyperparams(get_preset(g.algo, g.preset, g.library), g.hp)
   except ValueError as e:
     raise ConfigError(f"{key}: {e}") from None
   require(bool(g.steps) and all(1 <= n <= MAX_STEPS for n in g.steps), f"{key}.steps",
@@ -147,7 +147,7 @@ def _check_runs(spec: StudySpec) -> None:
   for i, g in enumerate(spec.groups):
     for task in group_tasks(spec, g):
       try:
-        cfg = load_config(task, tuple(get_preset(g.algo, g.preset).config_overrides) + g.set)
+        cfg = load_config(task, tuple(get_preset(g.algo, g.preset, g.library).config_overrides) + g.set)
         if g.early_stop:
           parse_early_stop(g.early_stop, cfg)
         if spec.robustness:  # its cases fit the task (e.g. a latency of at most a control period)
