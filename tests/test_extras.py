@@ -42,7 +42,7 @@ def test_pyproject_extras_install_the_modules_listed():
     for req in extras[extra]:
       name = re.match(r"[A-Za-z0-9_.-]+", req).group(0)
       inner = re.match(r"mjx-tracks\[(.+)\]", req)
-      out |= set().union(*(names(e) for e in inner.group(1).split(","))) if inner else {name.lower()}
+      out |= set().union(*(names(e) for e in inner.group(1).split(","))) if inner else {name.lower().replace("-", "_")}
     return out
 
   for extra, modules in EXTRAS.items():

@@ -85,8 +85,10 @@ def test_configurations_are_checked_by_the_command_lines_loader_and_errors_name_
   from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
   from train.core.presets import PRESETS
   trainers = client.get("/api/trainers").json()  # the form's choices come from train.core, not a copy
-  assert trainers == {"algos": {a: list(p) for a, p in PRESETS.items()}, "libraries": LIBRARIES,
-                      "default_library": DEFAULT_LIBRARY} and trainers["algos"]["sac"] == ["cpu", "gpu", "paper"]
+  assert trainers["algos"] == {a: list(p) for a, p in PRESETS.items()} and trainers["libraries"] == LIBRARIES
+  assert trainers["default_library"] == DEFAULT_LIBRARY and trainers["algos"]["sac"] == ["cpu", "gpu", "paper"]
+  assert trainers["library_algos"]["sb3"]["td3"] == ["paper", "cpu", "gpu"]  # each library its own presets
+  assert trainers["library_algos"][DEFAULT_LIBRARY] == trainers["algos"]
   ok = client.post("/api/validate", json={"task": "asc-inc-cog", "overrides": ["reward.cog_scale=0.5"]})
   assert ok.status_code == 200 and ok.json()["config"]["reward"]["cog_scale"] == 0.5
   cases = {("asc-inc-cog", "reward.cog_scal=1"): ["body", "overrides", "reward.cog_scal"],
