@@ -81,6 +81,17 @@ def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, m
   assert "sb3" in client.get("/api/trainers").json()["library_algos"]
 
 
+def test_an_sb3_run_stops_early_at_the_papers_return(tmp_path):
+  """A return threshold every report meets (-1000) ends the run at its first report."""
+  from train import run
+  from train.db import ExperimentDB
+  out, db_path = tmp_path / "e", tmp_path / "experiments.sqlite"
+  assert run.main(_args(out, db_path, "--early-stop", "return=-1000", "--checkpoint-every", "0")) == 0
+  (rec,) = ExperimentDB(str(db_path)).runs()
+  assert rec["status"] == "stopped_early" and [int(p.name) for p in (out / "checkpoints").iterdir()] == [100]
+  assert run.main(_args(tmp_path / "f", db_path, "--early-stop", "success")) == 2  # sb3 has no probe
+
+
 class _Spaces(gym.Env):
   """Spaces alone: SB3 builds its networks from them."""
   observation_space = gym.spaces.Box(-np.inf, np.inf, (9,), np.float32)
@@ -122,6 +133,6 @@ def test_study_specs_take_the_library_and_its_presets():
   cell = cells(spec)[0]
   assert cell.train_args()[-4:] == ["--library", "sb3", "--early-stop", "none"]
   for bad, key in (({"algo": "td3", "library": "mjx-tracks"}, "unknown algorithm"),
-                   ({"early_stop": "return"}, "no early stop"), ({"hp": ["gamma=2"]}, "gamma")):
+                   ({"early_stop": "success"}, "has no early stop"), ({"hp": ["gamma=2"]}, "gamma")):
     with pytest.raises(ConfigError, match=key):
       study_from_dict({"name": "s", "tasks": ["asc-inc-cog"], "seeds": [0], "groups": [{**group, **bad}]})

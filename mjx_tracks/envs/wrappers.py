@@ -80,13 +80,18 @@ class CurriculumAutoReset(Wrapper):
     if self.report is not None:
       jax.debug.callback(self.report, GlobalStats(cur, norm))
     split = jax.vmap(jax.random.split)(nstate.info["reset_key"])
-    fresh = jax.vmap(self.core.reset_at, in_axes=(0, None, None))(split[:, 0], cur.eps, norm.k)
 
     def where_done(new, old):
       mask = done.reshape(done.shape + (1,) * (new.ndim - done.ndim))
       return jnp.where(mask, new, old)
 
-    es = jax.tree_util.tree_map(where_done, fresh.pipeline_state, nstate.pipeline_state)
+    def reset_done(_):  # a new episode (scene draw, kinematics, beams) where one ended
+      fresh = jax.vmap(self.core.reset_at, in_axes=(0, None, None))(split[:, 0], cur.eps, norm.k)
+      return jax.tree_util.tree_map(where_done, (fresh.pipeline_state, fresh.obs), (nstate.pipeline_state, nstate.obs))
+
+    # computed only on steps where some episode ended: a batch of thousands always has one; one
+    # robot (the Gymnasium Env) skips the reset's cost on all its other steps
+    es, obs = jax.lax.cond(jnp.any(done), reset_done, lambda _: (nstate.pipeline_state, nstate.obs), None)
     es = es.replace(penalty_k=jnp.broadcast_to(norm.k, es.penalty_k.shape))
     n = done.shape[0]
     nstate.info["global"] = jax.tree_util.tree_map(
@@ -94,7 +99,7 @@ class CurriculumAutoReset(Wrapper):
     nstate.info["reset_key"] = split[:, 1]
     nstate.info["final_obs"] = nstate.obs
     nstate.info["eps"] = jnp.broadcast_to(cur.eps, (n,))
-    return nstate.replace(pipeline_state=es, obs=where_done(fresh.obs, nstate.obs))
+    return nstate.replace(pipeline_state=es, obs=obs)
 
 
 def _axis_bound(axis_name: Optional[str]) -> bool:

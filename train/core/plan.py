@@ -27,7 +27,7 @@ LIBRARIES = {
     "brax": "Brax's own ppo.train / sac.train on the same env and preset: no checkpoints, resume, probes, "
             "early stop or milestones (the parity reference)",
     "sb3": "Stable-Baselines3's SAC / TD3 / PPO (the [sb3] extra) on the task's Gymnasium VectorEnv, with its own "
-           "presets (train/core/sb3_presets.py): checkpoints and resume, no probes, early stop or milestones",
+           "presets (train/core/sb3_presets.py): checkpoints, resume and the return early stop; no probes or milestones",
 }
 RESUMABLE = ("mjx-tracks", "sb3")  # libraries whose runs save checkpoints
 DEFAULT_LIBRARY = "mjx-tracks"
@@ -198,18 +198,20 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
 
 
 def _library_limits(library: str, args: argparse.Namespace, early: EarlyStop | None):
-  """(early stop, probe interval, milestones) of a run another library trains: none of them; asking
-  for one is refused (the preset's own early stop is dropped)."""
+  """(early stop, probe interval, milestones) of a run another library trains: none of them but the
+  paper's return criterion with sb3 (its reports carry the training return; it has no probe);
+  asking for another is refused (the preset's own early stop is dropped)."""
   from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP  # noqa: PLC0415  (orbax: only for these runs)
   given = [f"--{n.replace('_', '-')}" for n in ("probe_every", "milestones", "coordinator")
            if getattr(args, n, None) not in (None, 0, "")]
-  if args.early_stop not in (None, NO_EARLY_STOP):
-    given.append("--early-stop")
+  keeps_early = library == "sb3" and early is not None and not early.needs_probe
+  if args.early_stop not in (None, NO_EARLY_STOP) and not keeps_early:
+    given.append("--early-stop" + (" success (sb3 has no probe; return[=X] it has)" if library == "sb3" else ""))
   given += [f"--{n.replace('_', '-')}" for n, default in (("checkpoint_every", CHECKPOINT_EVERY_S), ("keep_checkpoints", KEEP))
             if getattr(args, n, default) != default and library not in RESUMABLE]  # it saves none
   if given:
     raise RunError(f"--library {library} trains with {LIBRARIES[library]}; drop {', '.join(given)}")
-  return None, 0, ()
+  return (early if keeps_early and args.early_stop is not None else None), 0, ()
 
 
 def parse_milestones(text: str | None, total: int) -> tuple[int, ...]:

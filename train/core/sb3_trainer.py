@@ -93,16 +93,17 @@ def _callback(plan: RunPlan, venv: TaskVecEnv, reporter, ckpts: Checkpoints, db,
     def _on_training_start(self) -> None:
       self.next_report = self.num_timesteps + plan.preset.training_metrics_steps
       self.reported = self.num_timesteps
+      self.streak, self.early = 0, False  # reports in a row meeting the early stop (train.core.early_stop)
       self.last_save, self.t0, self.t0_step = time.time(), time.time(), self.num_timesteps
 
     def _on_step(self) -> bool:
       if self.num_timesteps >= self.next_report:
         self.report()
       if every_s and time.time() - self.last_save >= every_s:
-        db.set_checkpoint(plan.run_id, ckpts.dir, self.num_timesteps)
         ckpts.save(self.model, venv, self.num_timesteps)
+        db.set_checkpoint(plan.run_id, ckpts.dir, self.num_timesteps)
         self.last_save = time.time()
-      return stop.requested is None
+      return stop.requested is None and not self.early
 
     def report(self) -> None:
       if self.num_timesteps == self.reported:
@@ -111,8 +112,11 @@ def _callback(plan: RunPlan, venv: TaskVecEnv, reporter, ckpts: Checkpoints, db,
       sps = (self.num_timesteps - self.t0_step) / max(time.time() - self.t0, 1e-9)
       logged = {f"sb3/{k.replace('/', '_')}": float(v) for k, v in self.logger.name_to_value.items()
                 if np.ndim(v) == 0}
-      reporter(self.num_timesteps, {**episode_metrics(venv.take_finished()), **logged,
-                                    "curriculum/eps": venv.eps, "training/steps_per_s": sps})
+      row = reporter(self.num_timesteps, {**episode_metrics(venv.take_finished()), **logged,
+                                          "curriculum/eps": venv.eps, "training/steps_per_s": sps})
+      if plan.early_stop is not None:
+        self.streak = plan.early_stop.streak(self.streak, row)
+        self.early = self.streak >= plan.early_stop.times
       self.next_report = self.num_timesteps + plan.preset.training_metrics_steps
 
   return Recorder()
@@ -139,7 +143,7 @@ def train(plan: RunPlan, db, stop, checkpoint_every_s: float, keep: int) -> dict
   step = int(model.num_timesteps)
   ckpts.save(model, venv, step)
   db.set_checkpoint(plan.run_id, ckpts.dir, step)
-  reason = "interrupted" if stop.requested is not None else "done"
+  reason = "interrupted" if stop.requested is not None else "early_stop" if recorder.early else "done"
   return {"step": step, "reason": reason, "policy": export(plan, model, step), **reporter.latest}
 
 

@@ -119,8 +119,9 @@ def _group(raw, i: int) -> GroupSpec:
           f"one or more budgets from 1 to {MAX_STEPS:,}")
   require(len(g.set) <= MAX_OVERRIDES, f"{key}.set", f"at most {MAX_OVERRIDES} overrides")
   require(g.library in LIBRARIES, f"{key}.library", lambda: f"one of {tuple(LIBRARIES)}, got {show(g.library)}")
-  require(g.library == DEFAULT_LIBRARY or (g.budgets == "runs" and not g.early_stop), f"{key}.library",
-          f"{g.library} has no early stop or milestones: {LIBRARIES[g.library]}")
+  require(g.library == DEFAULT_LIBRARY or (g.budgets == "runs" and (not g.early_stop or (
+      g.library == "sb3" and g.early_stop.startswith("return")))), f"{key}.library",
+          f"{g.library} has no early stop (but sb3's return) and no milestones: {LIBRARIES[g.library]}")
   require(len(g.hp) <= MAX_OVERRIDES, f"{key}.hp", f"at most {MAX_OVERRIDES} hyper-parameters")
   require(g.backend in BACKENDS, f"{key}.backend", lambda: f"one of {BACKENDS}, got {show(g.backend)}")
   require(g.budgets in BUDGETS, f"{key}.budgets", lambda: f"one of {BUDGETS}, got {show(g.budgets)}")
