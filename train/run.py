@@ -27,6 +27,7 @@ from mjx_tracks.envs.config import ConfigError
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
+from train.core.presets import SB3
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RESUMABLE, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
@@ -97,7 +98,7 @@ def _train(plan: RunPlan, args) -> int:
   from train.core.interrupts import StopRequest  # noqa: PLC0415
   with StopRequest() as stop:
     try:
-      plan, session = (_sb3_session if plan.library == "sb3" else _own_session)(plan, args, stop)
+      plan, session = (_sb3_session if plan.library == SB3 else _own_session)(plan, args, stop)
     except RunError as e:
       print(f"error: {e}", file=sys.stderr)
       return 2

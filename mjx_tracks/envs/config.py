@@ -630,8 +630,8 @@ def _with_period_resolved(raw: dict) -> dict:
   """randomization.action_delay's `period` (randomization.PERIOD) as the task's control period in
   substeps; left as written where the period or timestep is not a number (the build names the key)."""
   from mjx_tracks.envs.randomization import resolve_period  # noqa: PLC0415
-  period = (raw.get("control") or {}).get("period") if isinstance(raw.get("control"), dict) else None
-  dt = (raw.get("physics") or {}).get("timestep") if isinstance(raw.get("physics"), dict) else None
+  section = lambda name: raw.get(name) if isinstance(raw.get(name), dict) else {}
+  period, dt = section("control").get("period"), section("physics").get("timestep")
   if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in (period, dt)):
     return raw
   return {**raw, "randomization": resolve_period(raw.get("randomization"), round(period / dt))}

@@ -13,7 +13,7 @@ from typing import Any
 from mjx_tracks.envs.config import TaskConfig, from_dict, load_config
 from mjx_tracks.limits import MAX_ENVS, MAX_SEED, MAX_STEPS
 from train.core.early_stop import NO_EARLY_STOP, EarlyStop, parse_early_stop
-from train.core.presets import CPU_DEFAULT, get_preset, with_hyperparams
+from train.core.presets import CPU_DEFAULT, SB3, get_preset, with_hyperparams
 from train.core.run_record import read_run_record, run_id_in, write_run_record
 
 
@@ -26,11 +26,11 @@ LIBRARIES = {
     "mjx-tracks": "this project's trainer (train/core): checkpoints, resume, probes, early stop, milestones",
     "brax": "Brax's own ppo.train / sac.train on the same env and preset: no checkpoints, resume, probes, "
             "early stop or milestones (the parity reference)",
-    "sb3": "Stable-Baselines3's SAC / TD3 / PPO (the [sb3] extra) on the task's Gymnasium VectorEnv, with its own "
+    SB3: "Stable-Baselines3's SAC / TD3 / PPO (the [sb3] extra) on the task's Gymnasium VectorEnv, with its own "
            "presets (train/core/sb3_presets.py): checkpoints, resume and the return early stop; no probes or milestones",
 }
-RESUMABLE = ("mjx-tracks", "sb3")  # libraries whose runs save checkpoints
 DEFAULT_LIBRARY = "mjx-tracks"
+RESUMABLE = (DEFAULT_LIBRARY, SB3)  # libraries whose runs save checkpoints
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,7 +60,7 @@ def default_preset(algo: str, library: str = DEFAULT_LIBRARY) -> str:
   solves the flagship task within 10 minutes on 2 cores (ppo) or the small one (sac); with
   --library sb3, its paper preset (one robot)."""
   import jax  # noqa: PLC0415
-  if library == "sb3":
+  if library == SB3:
     return "paper"
   if jax.default_backend() in ("gpu", "cuda", "rocm", "tpu"):
     return "gpu"
@@ -160,7 +160,7 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   library = getattr(args, "library", None) or DEFAULT_LIBRARY
   if library not in LIBRARIES:
     raise RunError(f"--library {library!r}: one of {', '.join(LIBRARIES)}")
-  algo, seed = args.algo or ("sac" if library == "sb3" else "ppo"), 0 if args.seed is None else args.seed
+  algo, seed = args.algo or ("sac" if library == SB3 else "ppo"), 0 if args.seed is None else args.seed
   preset_name = args.preset or default_preset(algo, library)
   try:
     preset = with_hyperparams(get_preset(algo, preset_name, library), args.hp)
@@ -204,9 +204,9 @@ def _library_limits(library: str, args: argparse.Namespace, early: EarlyStop | N
   from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP  # noqa: PLC0415  (orbax: only for these runs)
   given = [f"--{n.replace('_', '-')}" for n in ("probe_every", "milestones", "coordinator")
            if getattr(args, n, None) not in (None, 0, "")]
-  keeps_early = library == "sb3" and early is not None and not early.needs_probe
+  keeps_early = library == SB3 and early is not None and not early.needs_probe
   if args.early_stop not in (None, NO_EARLY_STOP) and not keeps_early:
-    given.append("--early-stop" + (" success (sb3 has no probe; return[=X] it has)" if library == "sb3" else ""))
+    given.append("--early-stop" + (" success (sb3 has no probe; return[=X] it has)" if library == SB3 else ""))
   given += [f"--{n.replace('_', '-')}" for n, default in (("checkpoint_every", CHECKPOINT_EVERY_S), ("keep_checkpoints", KEEP))
             if getattr(args, n, default) != default and library not in RESUMABLE]  # it saves none
   if given:

@@ -31,25 +31,24 @@ class _Common:
 
 
 @dataclasses.dataclass(frozen=True)
-class SACPreset(_Common):
+class _OffPolicy(_Common):
+  """What SB3's off-policy algorithms (SAC, TD3) share: a replay buffer and its update rhythm."""
   buffer_size: int = 1_000_000
   learning_starts: int = 100
   batch_size: int = 256
   tau: float = 0.005
   train_freq: int = 1  # steps of every robot between updates
   gradient_steps: int = 1
+
+
+@dataclasses.dataclass(frozen=True)
+class SACPreset(_OffPolicy):
   ent_coef_init: float = 0.5  # SB3's ent_coef="auto_<init>" (SB3's default is auto_1.0; the paper's 0.5)
 
 
 @dataclasses.dataclass(frozen=True)
-class TD3Preset(_Common):
+class TD3Preset(_OffPolicy):
   learning_rate: float = 1e-3
-  buffer_size: int = 1_000_000
-  learning_starts: int = 100
-  batch_size: int = 256
-  tau: float = 0.005
-  train_freq: int = 1
-  gradient_steps: int = 1
   policy_delay: int = 2
   action_noise: float = 0.1  # std of the Gaussian exploration noise (SB3: NormalActionNoise; none by default)
 

@@ -52,7 +52,7 @@ class Checkpoints:
 
   def __init__(self, run_dir: str, keep: int):
     from train.core.checkpoints import checkpoint_dir  # noqa: PLC0415
-    self.dir, self.keep = checkpoint_dir(run_dir), keep
+    self.run_dir, self.dir, self.keep = run_dir, checkpoint_dir(run_dir), keep
 
   def save(self, model, venv: TaskVecEnv, step: int) -> str:
     tmp, final = os.path.join(self.dir, f".tmp-{step}"), os.path.join(self.dir, str(step))
@@ -70,7 +70,8 @@ class Checkpoints:
     return final
 
   def steps(self) -> list[int]:
-    return sorted(int(d) for d in os.listdir(self.dir) if d.isdigit()) if os.path.isdir(self.dir) else []
+    from train.core.checkpoints import saved_steps  # noqa: PLC0415  (a step's folder is named by its number alone)
+    return saved_steps(self.run_dir)
 
   def load(self, plan: RunPlan, venv: TaskVecEnv):
     """(model, step) of the newest checkpoint, with its replay buffer and curriculum restored."""

@@ -14,7 +14,7 @@ from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, M
 from train.core.early_stop import NO_EARLY_STOP, parse_early_stop
 from train.evaluation import EVAL_TRIALS, robustness_scenes, scene_config
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
-from train.core.presets import get_preset, with_hyperparams
+from train.core.presets import SB3, get_preset, with_hyperparams
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES),
                   "robustness": False}
@@ -120,7 +120,7 @@ def _group(raw, i: int) -> GroupSpec:
   require(len(g.set) <= MAX_OVERRIDES, f"{key}.set", f"at most {MAX_OVERRIDES} overrides")
   require(g.library in LIBRARIES, f"{key}.library", lambda: f"one of {tuple(LIBRARIES)}, got {show(g.library)}")
   require(g.library == DEFAULT_LIBRARY or (g.budgets == "runs" and (not g.early_stop or (
-      g.library == "sb3" and g.early_stop.startswith("return")))), f"{key}.library",
+      g.library == SB3 and g.early_stop.startswith("return")))), f"{key}.library",
           f"{g.library} has no early stop (but sb3's return) and no milestones: {LIBRARIES[g.library]}")
   require(len(g.hp) <= MAX_OVERRIDES, f"{key}.hp", f"at most {MAX_OVERRIDES} hyper-parameters")
   require(g.backend in BACKENDS, f"{key}.backend", lambda: f"one of {BACKENDS}, got {show(g.backend)}")
