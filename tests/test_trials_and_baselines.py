@@ -12,6 +12,7 @@ import pytest
 from helpers import TINY_SETTINGS
 
 import mjx_tracks
+from mjx_tracks.envs.config import ConfigError
 from train import evaluate
 from train.db import ExperimentDB
 
@@ -19,9 +20,9 @@ N = 512  # resets drawn: the standard error of a U(-a, a) variance estimate is a
 JITTER = (0.1, 0.2, 0.3)  # m, rad, rad
 
 
-def _starts(jitter):
-  core = mjx_tracks.load("asc-inc-cog", [*TINY_SETTINGS, f"scene.start_jitter={list(jitter)}"])
-  keys = jax.random.split(jax.random.PRNGKey(3), N)
+def _starts(jitter, settings=(), n=N):
+  core = mjx_tracks.load("asc-inc-cog", [*TINY_SETTINGS, f"scene.start_jitter={list(jitter)}", *settings])
+  keys = jax.random.split(jax.random.PRNGKey(3), n)
   s = jax.jit(jax.vmap(core.reset_at, in_axes=(0, None, None)))(keys, jnp.float32(0.5), jnp.float32(1.0))
   es = s.pipeline_state
   qpos = np.asarray(es.data.qpos)
@@ -44,6 +45,17 @@ def test_the_start_jitter_is_uniform_within_its_bounds_and_the_servos_start_wher
     assert x.var() == pytest.approx(a * a / 3, rel=0.2)
   assert (joints >= limits[:, 0] - 1e-6).all() and (joints <= limits[:, 1] + 1e-6).all()
   np.testing.assert_allclose(np.asarray(es.targets), joints, atol=1e-6)
+
+
+def test_the_start_pose_places_its_joint_groups_within_their_limits_and_the_others_at_0():
+  core, es, qpos, _ = _starts((0.0, 0.0, 0.0), ["control.start_pose=[[front, 2.0], [arm_1, -0.3]]"], n=4)
+  joints = qpos[:, np.asarray(core.sim.layout.joint_qpos)]
+  names = core.robot.joint_names()  # front flippers clipped to their limit (pi / 4), arm_1 at -0.3, the rest 0
+  expected = [np.pi / 4 if n.startswith("flipper_front") else -0.3 if n == "arm_1" else 0.0 for n in names]
+  np.testing.assert_allclose(joints, np.broadcast_to(expected, joints.shape), atol=1e-6)
+  np.testing.assert_allclose(np.asarray(es.targets), joints, atol=1e-6)
+  with pytest.raises(ConfigError, match="not a joint group"):
+    mjx_tracks.load("asc-inc-cog", ["control.start_pose=[[nose, 0.5]]"])
 
 
 def test_a_baseline_is_evaluated_and_recorded_like_a_run_and_its_trials_are_samples(tmp_path, capsys):

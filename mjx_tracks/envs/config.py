@@ -127,6 +127,7 @@ class ControlConfig:
   v_range: tuple[float, float]  # m/s
   period: float = dataclasses.field(metadata=bound(0.01, 2.0))  # s between actions
   dof_curriculum: tuple[tuple[str, float], ...]  # (joint action dimension, eps from which it acts)
+  start_pose: tuple[tuple[str, float], ...]  # (joint group, rad): where those joints start; the others at 0
 
   def validate(self, key: str) -> None:
     from mjx_tracks.sim.control import CONTROL_MODES, unlock_values  # noqa: PLC0415
@@ -136,6 +137,10 @@ class ControlConfig:
       unlock_values(CONTROL_MODES[self.mode], self.dof_curriculum)
     except ValueError as e:
       require(False, f"{key}.dof_curriculum", str(e).partition(": ")[2])
+    from mjx_tracks.robots.spec import JOINT_GROUPS  # noqa: PLC0415
+    for group, angle in self.start_pose:
+      require(group in JOINT_GROUPS, f"{key}.start_pose", f"{group!r} is not a joint group; known: {sorted(JOINT_GROUPS)}")
+      require(abs(angle) <= 3.15, f"{key}.start_pose", f"{group}: {angle} rad is not an angle in [-pi, pi]")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -592,6 +597,7 @@ FROM_DEFAULTS = "from configs/defaults.yaml"  # an added key whose old runs neve
 ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  # before culling: every contact
               ("evaluation", "held_out"): [],  # before the evaluation suite: none
               ("control", "dof_curriculum"): [],  # before the DOF curriculum: every dimension acts
+              ("control", "start_pose"): [],  # before start poses: every joint at 0
               ("scene", "terrains"): [],  # before terrain tasks: none
               ("scene", "nav_floor_obstacles"): 0,  # before floor obstacles: none
               ("scene", "nav_floor_height"): FROM_DEFAULTS,

@@ -203,20 +203,21 @@ class TrackedRobotEnv(Env):
     return data, collided, robust
 
   def _start(self, scene: SceneState, key: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """The robot's start: the scene's spawn (ground point, yaw) and joints at 0, each varied by
-    scene.start_jitter (a_pos, a_yaw, a_joint): x, y ~ U(-a_pos, a_pos) m, yaw ~ + U(-a_yaw, a_yaw)
-    rad, every joint ~ U(-a_joint, a_joint) rad clipped to its limits; the joints' servo targets
-    start where the joints are."""
+    """The robot's start: the scene's spawn (ground point, yaw) and joints at control.start_pose (0
+    where it names none), each varied by scene.start_jitter (a_pos, a_yaw, a_joint): x, y ~ U(-a_pos,
+    a_pos) m, yaw ~ + U(-a_yaw, a_yaw) rad, every joint ~ + U(-a_joint, a_joint) rad, clipped to its
+    limits; the joints' servo targets start where the joints are."""
     nj = self.sim.layout.n_joints
+    lim = jnp.asarray(self.controller.joint_limits, jnp.float32)
+    pose = jnp.clip(self.robot.joint_vector(dict(self.cfg.control.start_pose)), lim[:, 0], lim[:, 1])
     a_pos, a_yaw, a_joint = self.cfg.scene.start_jitter
     if not (a_pos or a_yaw or a_joint):  # the paper's fixed start (and the same random stream as before)
-      return scene.spawn_pos, scene.spawn_yaw, jnp.zeros(nj)
+      return scene.spawn_pos, scene.spawn_yaw, pose
     k_pos, k_yaw, k_joint = jax.random.split(key, 3)
     offset = jax.random.uniform(k_pos, (2,), minval=-a_pos, maxval=a_pos)
     spawn = scene.spawn_pos.at[:2].add(offset)
     yaw = scene.spawn_yaw + jax.random.uniform(k_yaw, minval=-a_yaw, maxval=a_yaw)
-    lim = jnp.asarray(self.controller.joint_limits, jnp.float32)
-    joints = jnp.clip(jax.random.uniform(k_joint, (nj,), minval=-a_joint, maxval=a_joint), lim[:, 0], lim[:, 1])
+    joints = jnp.clip(pose + jax.random.uniform(k_joint, (nj,), minval=-a_joint, maxval=a_joint), lim[:, 0], lim[:, 1])
     return spawn, yaw, joints
 
   def _distance(self, pos: jax.Array, scene: SceneState) -> jax.Array:

@@ -134,9 +134,23 @@ class RobotSpec:
     names = self.joint_names()
     return np.array([names.index(j) for j in JOINT_GROUPS[group] if j in names], np.int32)
 
+  def joint_vector(self, by_group: dict, xp=np):
+    """Joint values (rad, joint_names() order) from angles per joint group (JOINT_GROUPS), 0 for the
+    others; xp: numpy, or jax.numpy where the angles are traced."""
+    values = xp.zeros(len(self.joint_names()), xp.float32)
+    for group, angle in by_group.items():
+      index = self.joint_index(group)
+      if xp is np:
+        values = values.copy()
+        values[index] = angle
+      else:
+        values = values.at[index].set(xp.asarray(angle, xp.float32))
+    return values
+
   def total_mass(self) -> float:
     m = self.chassis_mass + 2 * self.track_mass + sum(f.mass for f in self.flippers)
     if self.arm is not None:
       a = self.arm
       m += a.link1_mass + a.link2_mass + a.fixed_mass + a.payload_mass
     return m
+

@@ -11,10 +11,7 @@ from mjx_tracks.robots.spec import RobotSpec
 
 def joint_targets(robot: RobotSpec, by_group: dict[str, jnp.ndarray]) -> jnp.ndarray:
   """Joint target vector (rad, joint_names() order) from angles per joint group; others 0."""
-  targets = jnp.zeros(len(robot.joint_names()), jnp.float32)
-  for group, angle in by_group.items():
-    targets = targets.at[robot.joint_index(group)].set(jnp.asarray(angle, jnp.float32))
-  return targets
+  return robot.joint_vector(by_group, jnp)
 
 
 @dataclasses.dataclass(frozen=True)

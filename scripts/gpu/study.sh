@@ -17,6 +17,7 @@
 set -uo pipefail
 export PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 export XLA_FLAGS="--xla_cpu_multi_thread_eigen=false"  # many one-robot CPU runs side by side: one thread each
+export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1  # and PyTorch (the sb3 library's runs) one thread each too
 study=${STUDY:-paper}
 root=/tmp/studies
 log=$root/study.log

@@ -3,11 +3,12 @@ SB3 names its constructor's argument (so `--hp gamma=0.995` reads as SB3's docum
 value SB3's default unless a comment says otherwise.
 
 `paper` is the paper's regime: SB3's defaults, a 2 x 64 MLP, one robot, 20,000 control steps, and
-for SAC an initial entropy coefficient of 0.5 (auto-tuned from there, as SB3's "auto_0.5"). The paper
-also sets "the entropy regularization coefficient to 0.05". SB3's SAC has no second entropy
-parameter: its coefficient starts at the initial value and is tuned toward the target entropy
--dim(A). We read 0.05 as a value the tuned coefficient settles near, not as a setting, and leave
-SB3's target; the project's own `paper` preset (train/core/presets.py) reads it as tau instead.
+for SAC an initial entropy coefficient of 0.5 (auto-tuned from there, as SB3's "auto_0.5") and
+tau 0.05. The paper also sets "the entropy regularization coefficient to 0.05"; SB3's SAC has no
+second entropy parameter (its coefficient starts at the initial value and is tuned toward the
+target entropy -dim(A)), and the original's code (../shared/REFERENCE.md, "Learning") sets tau to
+0.05 beside ent_coef "auto_0.5": we read the paper's 0.05 as that tau, as the project's own `paper`
+preset (train/core/presets.py) does.
 """
 
 from __future__ import annotations
@@ -66,7 +67,7 @@ class PPOPreset(_Common):
 
 
 PRESETS = {
-    "sac": {"paper": SACPreset(),
+    "sac": {"paper": SACPreset(tau=0.05),  # the original's tau (module docstring)
             "cpu": SACPreset(num_timesteps=2_000, hidden=(32, 32), batch_size=64, training_metrics_steps=250),
             "gpu": SACPreset(num_envs=64, num_timesteps=2_000_000, hidden=(256, 256), gradient_steps=8,
                              training_metrics_steps=20_000)},
