@@ -28,3 +28,28 @@ def test_sac_trains_exports_and_resumes_bit_for_bit_with_its_replay_buffer(tmp_p
   assert any(".buffer.data" in leaf["path"] for leaf in meta["layout"])
   for k in a:
     np.testing.assert_array_equal(b[k], a[k], err_msg=k)
+
+
+def test_the_temperature_loss_is_brax_s_at_brax_s_target_and_moves_with_the_target():
+  import jax
+  import jax.numpy as jnp
+  from brax.training.agents.sac import losses, networks
+  from brax.training.acme import running_statistics, specs
+  from brax.training.types import Transition
+
+  from train.core.algos.sac import make_alpha_loss
+  obs_size, act_size, n = 7, 5, 64
+  nets = networks.make_sac_networks(obs_size, act_size, hidden_layer_sizes=(16,))
+  policy = nets.policy_network.init(jax.random.PRNGKey(0))
+  norm = running_statistics.init_state(specs.Array((obs_size,), jnp.float32))
+  obs = jax.random.normal(jax.random.PRNGKey(1), (n, obs_size))
+  t = Transition(obs, jnp.zeros((n, act_size)), jnp.zeros(n), jnp.ones(n), obs)
+  key, log_alpha = jax.random.PRNGKey(2), jnp.float32(-0.7)
+  brax_alpha_loss = losses.make_losses(nets, 1.0, 0.99, act_size)[0]  # the oracle: brax's own, at -0.5 x 5
+  ours = make_alpha_loss(nets, -0.5 * act_size)
+  np.testing.assert_allclose(ours(log_alpha, policy, norm, t, key), brax_alpha_loss(log_alpha, policy, norm, t, key),
+                             rtol=1e-6)
+  # the loss is alpha x mean(-log pi - target): lowering the target by 2.5 nats adds alpha x 2.5
+  sb3 = make_alpha_loss(nets, -1.0 * act_size)
+  np.testing.assert_allclose(sb3(log_alpha, policy, norm, t, key) - ours(log_alpha, policy, norm, t, key),
+                             np.exp(-0.7) * 2.5, rtol=1e-5)

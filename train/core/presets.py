@@ -48,6 +48,7 @@ class SACPreset:
   discounting: float = 0.99
   tau: float = 0.005
   reward_scaling: float = 10.0  # brax's SAC starts at alpha = 1; scaling rewards by s acts like alpha = 1/s
+  target_entropy: float = -0.5  # nats per action dimension the temperature is tuned toward (brax's; SB3's: -1)
   grad_updates_per_step: int = 8
   actor_steps_per_update: int = 8  # steps of every environment per jitted update (then control returns)
   min_replay_size: int = 8192
@@ -83,7 +84,8 @@ PRESETS: dict[str, dict[str, object]] = {
                          num_eval_envs=8, config_overrides=()),
         "gpu": SACPreset(),
         # paper: SB3 SAC, 2 x 64 MLP, ent_coef init 0.5 (reward scale 2 with brax's alpha = 1),
-        # tau 0.05, gamma 0.99, one robot, 20,000 control steps
+        # tau 0.05, gamma 0.99, one robot, 20,000 control steps (brax's target entropy; the
+        # paper-ablations study compares SB3's)
         "paper": SACPreset(num_envs=1, num_timesteps=20_000, batch_size=256, learning_rate=3e-4,
                            discounting=0.99, tau=0.05, reward_scaling=2.0, grad_updates_per_step=1,
                            actor_steps_per_update=50,
@@ -124,6 +126,7 @@ HP_ELSEWHERE = {"num_envs": "--num-envs", "num_timesteps": "--steps", "config_ov
 HP_ZERO_OK = {"probe_steps"}  # whole-number fields where 0 means none; the others count from 1
 HP_AT_MOST_ONE = {"discounting", "gae_lambda", "tau", "clipping_epsilon", "gamma", "clip_range"}
 HP_POSITIVE = {"learning_rate", "reward_scaling", "max_grad_norm", "tau"}  # 0 would train nothing
+HP_SIGNED = {"target_entropy"}  # any finite number (nats may be negative)
 
 
 def with_hyperparams(preset, items: Sequence[str]):
@@ -158,7 +161,7 @@ def _hp_value(key: str, text: str, default):
     ok = isinstance(value, int) and not isinstance(value, bool) and value >= (0 if key in HP_ZERO_OK else 1)
   elif isinstance(default, float):
     high = 1.0 if key in HP_AT_MOST_ONE else float("inf")
-    low_ok = (lambda v: v > 0) if key in HP_POSITIVE else (lambda v: v >= 0)
+    low_ok = (lambda v: v > 0) if key in HP_POSITIVE else (lambda v: True) if key in HP_SIGNED else (lambda v: v >= 0)
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) \
         and low_ok(value) and value <= high
     value = float(value) if ok else value
@@ -168,7 +171,7 @@ def _hp_value(key: str, text: str, default):
   if not ok:
     want = {bool: "true or false", int: f"a whole number >= {0 if key in HP_ZERO_OK else 1}",
             float: ("a number in (0, 1]" if key in HP_POSITIVE else "a number in [0, 1]") if key in HP_AT_MOST_ONE
-            else "a number > 0" if key in HP_POSITIVE else "a number >= 0"}.get(
+            else "a number > 0" if key in HP_POSITIVE else "a number" if key in HP_SIGNED else "a number >= 0"}.get(
                 type(default), "a list of widths, e.g. [64, 64]")
     raise ValueError(f"--hp {key}: {want}, got {text!r}")
   return value

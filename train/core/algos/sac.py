@@ -42,6 +42,18 @@ def _stored(t: Transition) -> Transition:
                             "policy_extras": {}})
 
 
+def make_alpha_loss(networks: sac_networks.SACNetworks, target_entropy: float):
+  """Brax's temperature loss (Haarnoja et al. 2018, eq. 18) toward `target_entropy` (nats), which
+  brax fixes at -0.5 x the action size and Stable-Baselines3 at -1 x it (SACPreset.target_entropy)."""
+  dist = networks.parametric_action_distribution
+
+  def alpha_loss(log_alpha, policy_params, normalizer_params, transitions: Transition, key):
+    params = networks.policy_network.apply(normalizer_params, policy_params, transitions.observation)
+    log_prob = dist.log_prob(params, dist.sample_no_postprocessing(params, key))
+    return jnp.mean(jnp.exp(log_alpha) * jax.lax.stop_gradient(-log_prob - target_entropy))
+  return alpha_loss
+
+
 class SAC:
   """The learner: `init(key)` and the pure `update(state) -> (state, metrics)`."""
 
@@ -55,8 +67,8 @@ class SAC:
                                                       p.batch_size * p.grad_updates_per_step)
     self.opt = {"policy": optax.adam(p.learning_rate), "q": optax.adam(p.learning_rate),
                 "alpha": optax.adam(ALPHA_LEARNING_RATE)}
-    alpha_loss, critic_loss, actor_loss = sac_losses.make_losses(networks, p.reward_scaling, p.discounting,
-                                                                 env.action_size)
+    _, critic_loss, actor_loss = sac_losses.make_losses(networks, p.reward_scaling, p.discounting, env.action_size)
+    alpha_loss = make_alpha_loss(networks, p.target_entropy * env.action_size)
     self.alpha_update = gradients.gradient_update_fn(alpha_loss, self.opt["alpha"], pmap_axis_name=None)
     self.critic_update = gradients.gradient_update_fn(critic_loss, self.opt["q"], pmap_axis_name=None)
     self.actor_update = gradients.gradient_update_fn(actor_loss, self.opt["policy"], pmap_axis_name=None)
