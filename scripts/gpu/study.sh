@@ -36,7 +36,7 @@ start() {
     rm -rf "${root:?}/$study" && cp -r "$from" "$root/$study"
   fi
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1) x $(nvidia-smi -L | wc -l)"
-  { echo "command: ${cmd[*]}"; echo "device: $device, $(nproc) CPU cores, date: $(date -u +%FT%TZ)"; } | tee -a "$log"
+  { echo "command: ${cmd[*]}"; echo "device: $device, $(nproc --all) CPU cores, date: $(date -u +%FT%TZ)"; } | tee -a "$log"
   local pp=${PYTHONPATH:-}
   PYTHONPATH="${pp//"$PWD"/$root/src}" setsid bash -c 'cd "'"$root/src"'" && "$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
   sleep 2
