@@ -153,4 +153,3 @@ class RobotSpec:
       a = self.arm
       m += a.link1_mass + a.link2_mass + a.fixed_mass + a.payload_mass
     return m
-

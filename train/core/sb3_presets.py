@@ -6,9 +6,9 @@ value SB3's default unless a comment says otherwise.
 for SAC an initial entropy coefficient of 0.5 (auto-tuned from there, as SB3's "auto_0.5") and
 tau 0.05. The paper also sets "the entropy regularization coefficient to 0.05"; SB3's SAC has no
 second entropy parameter (its coefficient starts at the initial value and is tuned toward the
-target entropy -dim(A)), and the original's code (../shared/REFERENCE.md, "Learning") sets tau to
-0.05 beside ent_coef "auto_0.5": we read the paper's 0.05 as that tau, as the project's own `paper`
-preset (train/core/presets.py) does.
+target entropy -dim(A)), and the original framework's code passes tau=0.05 beside
+ent_coef="auto_0.5": we read the paper's 0.05 as that tau, as the project's own `paper` preset
+(train/core/presets.py) does.
 """
 
 from __future__ import annotations
