@@ -37,11 +37,16 @@ class Baseline:
   make: Callable[["TrackedRobotEnv"], Callable]  # core -> act(states) -> actions (batch)
 
 
+def constant_act(core, action):
+  """act(states) -> the same action vector for every state of the batch."""
+  import jax.numpy as jnp  # noqa: PLC0415
+  return lambda states: jnp.broadcast_to(action, (states.obs.shape[0], core.action_size))
+
+
 def _constant(speed: float):
   def make(core):
     import jax.numpy as jnp  # noqa: PLC0415
-    action = jnp.zeros(core.action_size).at[0].set(speed)  # action 0 is v in every control mode
-    return lambda states: jnp.broadcast_to(action, (states.obs.shape[0], core.action_size))
+    return constant_act(core, jnp.zeros(core.action_size).at[0].set(speed))  # action 0 is v in every control mode
   return make
 
 

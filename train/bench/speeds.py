@@ -22,15 +22,17 @@ def add_args(p) -> None:
 
 
 def constant_action(cfg, core, speed: float, raised: str):
-  """The action vector: belt speed (m/s) mapped onto [-1, 1] by control.v_range; joints held (0),
-  but `raised`'s dimension at +1; BenchInputError for a speed out of range or an unknown dimension."""
+  """The action vector: belt speed (m/s) as the controller encodes it, no turn, joints held (no
+  increment; with absolute targets, at 0), but `raised`'s dimension at +1; BenchInputError for a speed out of range or an
+  unknown dimension."""
   import jax.numpy as jnp  # noqa: PLC0415
 
   from train.bench.result import BenchInputError  # noqa: PLC0415
   lo, hi = cfg.control.v_range
   if not lo <= speed <= hi:
     raise BenchInputError(f"--speeds: {speed} m/s is outside the task's v_range [{lo}, {hi}]")
-  action = jnp.zeros(core.action_size).at[0].set(2 * (speed - lo) / (hi - lo) - 1)
+  held = jnp.zeros(core.sim.layout.n_joints)
+  action = core.controller.encode(jnp.float32(speed), jnp.float32(0.0), held, held)
   if raised:
     dims = core.controller.dims
     if raised not in dims:
@@ -40,9 +42,9 @@ def constant_action(cfg, core, speed: float, raised: str):
 
 
 def rows_for(task: str, scene: str, speeds: list[float], raised: str, trials: int) -> list[dict]:
-  import jax.numpy as jnp  # noqa: PLC0415
   import numpy as np  # noqa: PLC0415
 
+  from mjx_tracks.baselines import constant_act  # noqa: PLC0415
   from mjx_tracks.envs.config import load_config  # noqa: PLC0415
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   from mjx_tracks.metrics import EPISODE_NAMES  # noqa: PLC0415
@@ -50,8 +52,7 @@ def rows_for(task: str, scene: str, speeds: list[float], raised: str, trials: in
   cfg = scene_config(load_config(task), scene)
   core = TrackedRobotEnv(cfg)
   actions = [constant_action(cfg, core, v, raised) for v in speeds]  # every input checked before compiling
-  act = lambda action: (lambda states: jnp.broadcast_to(action, (states.obs.shape[0], core.action_size)))  # noqa: E731
-  run = trial_runner(cfg, act, trials, EVAL_EPS, EVAL_SEED, observe=lambda s: s)
+  run = trial_runner(cfg, lambda action: constant_act(core, action), trials, EVAL_EPS, EVAL_SEED, observe=lambda s: s)
   rows = []
   for speed, action in zip(speeds, actions):
     per_trial, _, _ = run(action)
