@@ -10,7 +10,7 @@
 # its finished runs are skipped. Without FROM, a study folder committed at results/studies/$STUDY
 # (its state.json) is where it starts from; FROM=none starts afresh. A study still running when the machine goes back resumes the same
 # way from the last pack (its running attempts start again).
-# The study runs from a copy of the tree made at its start (/tmp/studies/src), so later calls, which
+# The study runs from a copy of the tree made at its start (/tmp/studies/src-$STUDY), so later calls, which
 # bring the working tree again, never change the code of a study under way.
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.
 # Usage: [STUDY=paper] WAIT=560 SLOTS_PER_GPU=2 CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu/study.sh [ARGS]
@@ -20,15 +20,16 @@ export XLA_FLAGS="--xla_cpu_multi_thread_eigen=false"  # many one-robot CPU runs
 export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1  # and PyTorch (the sb3 library's runs) one thread each too
 study=${STUDY:-paper}
 root=/tmp/studies
-log=$root/study.log
-pidfile=$root/study.pid
+log=$root/$study.log  # per study, so two studies can run side by side on one machine
+pidfile=$root/$study.pid
+src=$root/src-$study
 cmd=(python3 -m train.study "$study" --root "$root" --slots-per-gpu "${SLOTS_PER_GPU:-1}" --cpu-slots "${CPU_SLOTS:-20}" "$@")
 
 running() { [ -f "$pidfile" ] && kill -0 "$(cat "$pidfile")" 2>/dev/null; }
 
 start() {
   mkdir -p "$root"
-  rm -rf "${root:?}/src" && mkdir "$root/src" && tar cf - --exclude=./.whl --exclude=./.bench --exclude=./runs . | tar xf - -C "$root/src"
+  rm -rf "${src:?}" && mkdir "$src" && tar cf - --exclude=./.whl --exclude=./.bench --exclude=./runs . | tar xf - -C "$src"
   local from=${FROM:-}
   if [ -z "$from" ] && [ -f "results/studies/$study/state.json" ]; then from="results/studies/$study"; fi
   if [ -n "$from" ] && [ "$from" != none ]; then
@@ -38,13 +39,13 @@ start() {
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1) x $(nvidia-smi -L | wc -l)"
   { echo "command: ${cmd[*]}"; echo "device: $device, $(nproc --all) CPU cores, date: $(date -u +%FT%TZ)"; } | tee -a "$log"
   local pp=${PYTHONPATH:-}
-  PYTHONPATH="${pp//"$PWD"/$root/src}" setsid bash -c 'cd "'"$root/src"'" && "$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
+  PYTHONPATH="${pp//"$PWD"/$src}" setsid bash -c 'cd "'"$src"'" && "$@" 2>&1 | grep --line-buffered -v "distributed.scheduler - ERROR" >>"'"$log"'"' _ "${cmd[@]}" </dev/null >/dev/null 2>&1 &
   sleep 2
   pgrep -o -s $! -x python3 >"$pidfile"  # setsid made the shell a session leader: its sid is its pid
 }
 
 pack() {
-  cp "$log" "$root/$study/" 2>/dev/null
+  cp "$log" "$root/$study/study.log" 2>/dev/null
   (cd /tmp && tar czf "$OUT/$study-study.tgz.tmp" --exclude=checkpoints "studies/$study" study-cell-*/attempt.log 2>/dev/null)
   mv "$OUT/$study-study.tgz.tmp" "$OUT/$study-study.tgz"
 }
