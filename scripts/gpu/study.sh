@@ -8,8 +8,11 @@
 # `python -m train.study report $STUDY --root DIR`.
 # FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
 # its finished runs are skipped. Without FROM, a study folder committed at results/studies/$STUDY
-# (its state.json) is where it starts from; FROM=none starts afresh. A study still running when the machine goes back resumes the same
-# way from the last pack (its running attempts start again).
+# (its state.json) is where it starts from; FROM=none starts afresh. A study folder already on this
+# machine (/tmp/studies/$STUDY, from an earlier call) always continues in place: a call that finds its
+# study ended never deletes what it made (FROM and the committed folder are then not used). A study
+# still running when the machine goes back resumes the same way from the last pack (its running
+# attempts start again).
 # The study runs from a copy of the tree made at its start (/tmp/studies/src-$STUDY), so later calls, which
 # bring the working tree again, never change the code of a study under way.
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.
@@ -32,7 +35,11 @@ start() {
   rm -rf "${src:?}" && mkdir "$src" && tar cf - --exclude=./.whl --exclude=./.bench --exclude=./runs . | tar xf - -C "$src"
   local from=${FROM:-}
   if [ -z "$from" ] && [ -f "results/studies/$study/state.json" ]; then from="results/studies/$study"; fi
-  if [ -n "$from" ] && [ "$from" != none ]; then
+  if [ -f "$root/$study/state.json" ]; then
+    # a study that ran on this machine (finished, or its process gone) continues in place: its
+    # folder may hold runs not packed yet, so it is never replaced by FROM or the committed one
+    echo "continuing $root/$study in place (its finished runs are skipped; FROM not used)" | tee -a "$log"
+  elif [ -n "$from" ] && [ "$from" != none ]; then
     echo "starting from $from (its finished runs are skipped)" | tee -a "$log"
     rm -rf "${root:?}/$study" && cp -r "$from" "$root/$study"
   fi
