@@ -5,6 +5,11 @@ import os
 import pathlib  # noqa: F401  (a type in a hint)
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
+# LLVM without its optimization passes: the suite's time is mostly XLA compiling programs that then
+# run a few steps (-25 % compile time per program); the persistent cache keys on XLA_FLAGS, so these
+# programs never serve a run outside the tests. Reaches the subprocesses the tests start.
+if "xla_backend_optimization_level" not in os.environ.get("XLA_FLAGS", ""):
+  os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_backend_optimization_level=0".strip()
 
 import mjx_tracks  # noqa: E402,F401  (first: picks the headless GL backend before mujoco loads)
 import jax  # noqa: E402

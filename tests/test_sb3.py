@@ -3,8 +3,11 @@ request as Ctrl-C makes one), resumes with its replay buffer and curriculum, exp
 acts as SB3's own deterministic policy, is evaluated, and shows in the dashboard's API; the export
 of each algorithm against SB3's predict; the presets in study specs."""
 
+import glob
 import json
+import os
 import signal
+import tempfile
 
 import gymnasium as gym
 import numpy as np
@@ -44,7 +47,8 @@ def _args(out, db, *more):
           "--hp", "training_metrics_steps=100", "--out", str(out), "--db", str(db), *more]
 
 
-def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, monkeypatch):
+def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, monkeypatch, capsys):
+  import jax
   from stable_baselines3 import SAC
 
   from train import evaluate, run
@@ -53,6 +57,7 @@ def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, m
   from train.server.app import create_app
   from train.server.settings import Settings
   out, db_path = tmp_path / "runs" / "a", tmp_path / "runs" / "experiments.sqlite"
+  sb3_log_folders = set(glob.glob(os.path.join(tempfile.gettempdir(), "SB3-*")))  # SB3's default logger makes one per learn()
   monkeypatch.setattr(interrupts, "StopRequest", _StopAfter(150))
   assert run.main(_args(out, db_path)) == 130  # stopped: a checkpoint and the policy saved
   (first,) = [int(p.name) for p in (out / "checkpoints").iterdir()]
@@ -79,6 +84,29 @@ def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, m
   (shown,) = client.get("/api/runs").json()
   assert shown["run_id"] == rec["run_id"] and shown["status"] == "done" and shown["step"] == 400
   assert "sb3" in client.get("/api/trainers").json()["library_algos"]
+  # --checkpoint evaluates an SB3 checkpoint as a killed run's: the newest holds the exported policy
+  from train.core.policy import load_checkpoint_params, load_policy_params
+  spec, params, step = load_checkpoint_params(str(out))
+  exported_spec, exported = load_policy_params(str(out / "policy"))
+  assert (step, spec) == (400, exported_spec)
+  for a, b in zip(jax.tree_util.tree_leaves(params), jax.tree_util.tree_leaves(exported), strict=True):
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+  assert evaluate.main([str(out), "--checkpoint", str(first), "--trials", "2", "--out", str(tmp_path / "ck.json"),
+                        "--db", str(db_path)]) == 0
+  ck = json.loads((tmp_path / "ck.json").read_text())
+  assert (ck["policy_step"], ck["checkpoint"]) == (first, True)
+  # a damaged newest checkpoint: evaluating it fails in one line; training further falls back to the
+  # one before, in one warning line, and records no step twice
+  (out / "checkpoints" / "400" / "model.zip").write_bytes(b"damaged")
+  with pytest.raises(ValueError, match="cannot read checkpoint 400"):
+    load_checkpoint_params(str(out))
+  capsys.readouterr()
+  assert run.main(["--resume", str(out), "--db", str(db_path), "--steps", "450"]) == 0
+  said = capsys.readouterr()
+  assert f"falling back to checkpoint {first:,}" in said.err and f"from its checkpoint at step {first:,}" in said.out
+  steps = [r["step"] for r in db.stats(rec["run_id"])]
+  assert steps == sorted(set(steps)) and steps[-1] == 450
+  assert set(glob.glob(os.path.join(tempfile.gettempdir(), "SB3-*"))) == sb3_log_folders
 
 
 def test_an_sb3_run_stops_early_at_the_papers_return(tmp_path):

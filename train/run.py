@@ -135,7 +135,8 @@ def _sb3_session(plan: RunPlan, args, stop):
   from train.core import sb3_trainer  # noqa: PLC0415
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset) by Stable-Baselines3, {plan.num_envs} envs, "
         f"{plan.total_steps:,} steps -> {plan.out_dir}", flush=True)
-  return plan, lambda db: sb3_trainer.train(plan, db, stop, args.checkpoint_every, args.keep_checkpoints)
+  plan, learn = sb3_trainer.prepare(plan, args.keep_checkpoints)
+  return plan, lambda db: learn(db, stop, args.checkpoint_every)
 
 
 def _train_elsewhere(plan: RunPlan, args) -> int:

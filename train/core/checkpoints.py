@@ -143,10 +143,16 @@ class RunCheckpoints:
       except CheckpointError:
         raise
       except Exception as e:  # orbax / tensorstore raise many types for damaged files
-        reason = str(e).strip().splitlines()[0][:160] if str(e).strip() else type(e).__name__
-        fallback = f"falling back to checkpoint {steps[i + 1]:,}" if i + 1 < len(steps) else "no older one"
-        say(f"warning: checkpoint {step:,} in {self.dir} is unreadable ({reason}); {fallback}")
+        say(unreadable_warning(self.dir, steps, i, e))
     raise CheckpointError(f"no readable checkpoint in {self.dir}")
+
+
+def unreadable_warning(folder: str, steps: list[int], i: int, error: Exception) -> str:
+  """The one line that reports the damaged checkpoint steps[i] (steps newest first) and what a
+  resume falls back to."""
+  reason = str(error).strip().splitlines()[0][:160] if str(error).strip() else type(error).__name__
+  fallback = f"falling back to checkpoint {steps[i + 1]:,}" if i + 1 < len(steps) else "no older one"
+  return f"warning: checkpoint {steps[i]:,} in {folder} is unreadable ({reason}); {fallback}"
 
 
 def policy_params(raw: dict, spec: NetworkSpec):

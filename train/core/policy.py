@@ -61,18 +61,31 @@ def make_act(spec: NetworkSpec, params, deterministic: bool = True):
 
 def load_checkpoint_params(run_dir: str, step: int | None = None):
   """(network spec, (normalizer, policy) parameters, step) of a training checkpoint (default: the
-  latest), e.g. of a killed run."""
+  latest), e.g. of a killed run; of the project's trainer or of Stable-Baselines3 (run.json's library)."""
   from train.core.checkpoints import RunCheckpoints, checkpoint_dir, policy_params, saved_steps  # noqa: PLC0415
+  from train.core.presets import SB3  # noqa: PLC0415
+  from train.core.run_record import read_run_record  # noqa: PLC0415
   steps = saved_steps(run_dir)
   if not steps:
     raise FileNotFoundError(f"no checkpoint in {checkpoint_dir(run_dir)} to evaluate")
   if step is not None and step not in steps:
     raise ValueError(f"no checkpoint {step} in {checkpoint_dir(run_dir)}; there are {steps}")
+  step = steps[-1] if step is None else step
+  try:
+    record = read_run_record(run_dir, ("algo",))
+  except FileNotFoundError:  # checkpoints alone, no run.json: the project's trainer's
+    record = {}
+  if record.get("library") == SB3:
+    from train.core.sb3_trainer import checkpoint_policy  # noqa: PLC0415
+    try:
+      return (*checkpoint_policy(run_dir, record["algo"], step), step)
+    except Exception as e:  # zip / torch readers raise several types for damaged files
+      raise ValueError(f"cannot read checkpoint {step} in {checkpoint_dir(run_dir)}: {e}") from e
   ckpts = RunCheckpoints(run_dir)
   try:
     raw, meta = ckpts.restore(step)
   except Exception as e:  # orbax raises several types for missing or damaged files
-    raise ValueError(f"cannot read checkpoint {step if step is not None else 'latest'} in {ckpts.dir}: {e}") from e
+    raise ValueError(f"cannot read checkpoint {step} in {ckpts.dir}: {e}") from e
   spec = NetworkSpec.from_json(meta["network"])
   return spec, policy_params(raw, spec), int(meta["step"])
 

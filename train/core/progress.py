@@ -52,10 +52,10 @@ class Reporter:
   'training/...' losses, 'curriculum/eps'); prints, logs to TensorBoard and the database."""
 
   def __init__(self, total_steps: int, start_step: int, db=None, run_id: str | None = None,
-               tb_dir: str | None = None, stream=sys.stdout, wall_offset: float = 0.0):
+               tb_dir: str | None = None, stream=None, wall_offset: float = 0.0):
     self.total, self.start_step = total_steps, start_step
     self.db, self.run_id = db, run_id
-    self.stream = stream
+    self.stream = stream  # None: sys.stdout as it is when a line is printed (not when this module loaded)
     self.session_t0 = time.time()
     self.t0 = self.session_t0 - wall_offset  # s: a resumed run's wall time continues from its checkpoint
     self.latest: dict[str, float] = {}
@@ -97,7 +97,7 @@ class Reporter:
           f"progress {f('progress_mean', '{:.3f}')} | eps {f('eps', '{:.2f}')} | "
           f"cog {f('cog_deviation_mean', '{:.3f}')} m | pitch rate {f('pitch_rate_mean', '{:.2f}')} rad/s | "
           f"tipped {f('tipped_rate', '{:.1%}')} | success {f('success_rate', '{:.1%}')} | "
-          f"{row['wall_s']:,.0f} s, eta {eta:,.0f} s", file=self.stream, flush=True)
+          f"{row['wall_s']:,.0f} s, eta {eta:,.0f} s", file=self.stream or sys.stdout, flush=True)
 
   def close(self) -> None:
     if self.writer:

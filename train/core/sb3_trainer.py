@@ -18,12 +18,14 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 import time
 
 import numpy as np
 from flax import serialization
 
-from train.core.plan import RunPlan
+from train.core.checkpoints import CheckpointError, unreadable_warning
+from train.core.plan import RunError, RunPlan
 from train.core.sb3_env import TaskVecEnv, episode_metrics
 from train.core.sb3_export import network_spec, policy_params
 from train.core.sb3_presets import model_kwargs
@@ -73,16 +75,43 @@ class Checkpoints:
     from train.core.checkpoints import saved_steps  # noqa: PLC0415  (a step's folder is named by its number alone)
     return saved_steps(self.run_dir)
 
-  def load(self, plan: RunPlan, venv: TaskVecEnv):
-    """(model, step) of the newest checkpoint, with its replay buffer and curriculum restored."""
-    step = self.steps()[-1]
-    path = os.path.join(self.dir, str(step))
-    model = _algo_class(plan.algo).load(os.path.join(path, MODEL), env=venv, device="cpu")
-    if os.path.exists(os.path.join(path, BUFFER)):
-      model.load_replay_buffer(os.path.join(path, BUFFER))
-    with open(os.path.join(path, CURRICULUM), "rb") as f:
-      venv.set_curriculum_state(serialization.from_bytes(venv.curriculum_state(), f.read()))
-    return model, step
+  def load(self, plan: RunPlan, venv: TaskVecEnv, say=lambda m: print(m, file=sys.stderr)):
+    """(model, step) of the newest checkpoint that reads back whole, with its replay buffer and
+    curriculum restored; each damaged one newer than it is reported in one line and skipped (as
+    RunCheckpoints.restore_latest_good does for the project's trainer)."""
+    steps = self.steps()[::-1]
+    for i, step in enumerate(steps):
+      path = os.path.join(self.dir, str(step))
+      try:
+        model = load_model(plan.algo, path, venv)
+        if os.path.exists(os.path.join(path, BUFFER)):
+          model.load_replay_buffer(os.path.join(path, BUFFER))
+        with open(os.path.join(path, CURRICULUM), "rb") as f:
+          venv.set_curriculum_state(serialization.from_bytes(venv.curriculum_state(), f.read()))
+        return model, step
+      except Exception as e:  # zip, pickle and msgpack readers raise many types for damaged files
+        say(unreadable_warning(self.dir, steps, i, e))
+    raise CheckpointError(f"no readable checkpoint in {self.dir}")
+
+
+def load_model(algo: str, checkpoint: str, venv: TaskVecEnv | None = None):
+  """The SB3 model of a checkpoint folder (RUN/checkpoints/<step>), on the CPU; with venv, ready
+  to train on it."""
+  return _algo_class(algo).load(os.path.join(checkpoint, MODEL), env=venv, device="cpu")
+
+
+def checkpoint_policy(run_dir: str, algo: str, step: int):
+  """(network spec, (normalizer, policy) parameters) of the deterministic policy in an SB3 run's
+  checkpoint at `step` (train.evaluate --checkpoint), as export() would write it."""
+  model = load_model(algo, os.path.join(Checkpoints(run_dir, 1).dir, str(step)))
+  spec = _spec(algo, model)
+  return spec, policy_params(algo, model, spec)
+
+
+def _spec(algo: str, model):
+  """The NetworkSpec of a model's policy: its observation and action sizes, its MLP widths."""
+  hidden = tuple(model.policy_kwargs["net_arch"])
+  return network_spec(algo, model.observation_space.shape[0], model.action_space.shape[0], hidden)
 
 
 def _callback(plan: RunPlan, venv: TaskVecEnv, reporter, ckpts: Checkpoints, db, stop, every_s: float):
@@ -123,18 +152,35 @@ def _callback(plan: RunPlan, venv: TaskVecEnv, reporter, ckpts: Checkpoints, db,
   return Recorder()
 
 
-def train(plan: RunPlan, db, stop, checkpoint_every_s: float, keep: int) -> dict:
-  """Trains (or resumes) the plan with SB3; checkpoints and exports where it stops; returns the
-  run's final figures (step, reason, the last report's figures, policy)."""
-  from train.core.progress import Reporter  # noqa: PLC0415
+def prepare(plan: RunPlan, keep: int):
+  """(plan, train(db, stop, checkpoint_every_s) -> final figures): the env and the model built, or
+  restored from the newest readable checkpoint before any record is touched (the plan then says
+  the step it continues from, so the database drops only the rows past it)."""
+  import dataclasses  # noqa: PLC0415
   venv = TaskVecEnv(plan.task, plan.num_envs, tuple(plan.preset.config_overrides) + plan.overrides, plan.seed)
   ckpts = Checkpoints(plan.out_dir, keep)
-  model, step = ckpts.load(plan, venv) if plan.resume else (_new_model(plan, venv), 0)
+  try:
+    model, step = ckpts.load(plan, venv) if plan.resume else (_new_model(plan, venv), 0)
+  except CheckpointError as e:
+    raise RunError(f"--resume {plan.out_dir}: {e}") from None
   if plan.resume:
+    plan = dataclasses.replace(plan, start_step=step)
     print(f"resuming run {plan.run_id} from its checkpoint at step {step:,}, to {plan.total_steps:,} steps", flush=True)
+  return plan, lambda db, stop, every_s: _learn(plan, venv, model, ckpts, db, stop, every_s)
+
+
+def _learn(plan: RunPlan, venv: TaskVecEnv, model, ckpts: Checkpoints, db, stop, checkpoint_every_s: float) -> dict:
+  """Trains the prepared model to the plan's total; checkpoints and exports where it stops; returns
+  the run's final figures (step, reason, the last report's figures, policy)."""
+  from train.core.progress import Reporter  # noqa: PLC0415
+  step = plan.start_step
   reporter = Reporter(plan.total_steps, step, db, plan.run_id, os.path.join(plan.out_dir, "tb"),
                       wall_offset=db.wall_offset(plan.run_id, step))
   recorder = _callback(plan, venv, reporter, ckpts, db, stop, checkpoint_every_s)
+  from stable_baselines3.common.logger import Logger  # noqa: PLC0415
+  # SB3's own logger, without outputs: the recorder reads its values (otherwise learn() makes an
+  # empty /tmp/SB3-<date> folder per call); the run's TensorBoard is the Reporter's
+  model.set_logger(Logger(folder=None, output_formats=[]))
   try:
     model.learn(total_timesteps=plan.total_steps - step, callback=recorder, reset_num_timesteps=not plan.resume,
                 progress_bar=False)
@@ -151,8 +197,7 @@ def train(plan: RunPlan, db, stop, checkpoint_every_s: float, keep: int) -> dict
 def export(plan: RunPlan, model, step: int) -> str:
   """RUN/policy/ of the model's deterministic policy (train.core.sb3_export)."""
   from train.core.checkpoints import export_policy  # noqa: PLC0415
-  obs, act = model.observation_space.shape[0], model.action_space.shape[0]
-  spec = network_spec(plan.algo, obs, act, tuple(plan.preset.hidden))
+  spec = _spec(plan.algo, model)
   normalizer, policy = policy_params(plan.algo, model, spec)
   info = {"task": plan.task, "algo": plan.algo, "step": step, "run_id": plan.run_id, "config": plan.cfg.to_dict(),
           "trainer": "sb3"}
