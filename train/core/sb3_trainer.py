@@ -9,7 +9,7 @@ studies, ONNX export and the dashboard.
 A checkpoint, RUN/checkpoints/<step>/, is SB3's own: model.zip (`model.save`: parameters and
 optimizers), replay_buffer.pkl (`save_replay_buffer`, off-policy algorithms), and the curriculum
 (and penalty normalizer) state; written into a temporary folder and renamed whole. A resumed run
-loads them (`Algo.load`, `load_replay_buffer`) and continues SB3's step count
+loads the newest one that reads back whole (`Algo.load`, `load_replay_buffer`) and continues SB3's step count
 (`reset_num_timesteps=False`); the robots start new episodes at the restored difficulty. Torch
 runs on the CPU (SB3's advice for MLP policies; the GPU stays JAX's).
 """
