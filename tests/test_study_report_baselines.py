@@ -78,3 +78,16 @@ def test_the_final_figure_draws_each_baseline_beside_the_trained_policy():
                    for seg in c.get_segments() if len(seg) == 2 and seg[0][1] == seg[1][1])
   # zero 0.25 and full 1.0 on asc-inc-cog; zero 0.75 and full 0.5 on des-inc-ang (made-up trials above)
   assert {0.25, 0.5, 0.75, 1.0} <= set(heights)
+
+
+def test_attempts_cut_off_by_a_stopped_study_are_counted_not_listed_as_failures():
+  from types import SimpleNamespace
+
+  from train.study.report import attempts_lines
+  stopped = {"stopped": True, "rc": None, "worker": None, "phase": None, "error": "the study stopped during this attempt"}
+  state = {"g/t/1/s0": {"status": "done", "attempts": [stopped, {"rc": 0, "worker": "cpu", "phase": "evaluate"}]},
+           "g/t/1/s1": {"status": "failed", "attempts": [dict(stopped), {"rc": 1, "worker": "cpu", "phase": "train",
+                                                                         "error": "Traceback\nValueError: boom"}]}}
+  lines = attempts_lines(SimpleNamespace(state=state))
+  assert lines[1].startswith("- 2 attempts were cut off by the study stopping")
+  assert [line for line in lines if "` attempt" in line] == ["- `g/t/1/s1` attempt 2 on cpu: rc 1, train: ValueError: boom"]

@@ -175,14 +175,20 @@ def baseline_table(results: StudyResults) -> list[str]:
 
 
 def attempts_lines(results: StudyResults) -> list[str]:
-  """Runs done / failed / unfinished, retried runs and every failed attempt's reason."""
+  """Runs done / failed / unfinished, retried runs and every failed attempt's reason; attempts cut
+  off by the study stopping (a machine given back) are counted in one line, not failures."""
   state = results.state
-  lines = [f"- {overview(state)}."]
+  lines, cut_off = [f"- {overview(state)}."], 0
   for cid, c in state.items():
     for i, a in enumerate(c["attempts"], 1):
-      if a.get("rc") not in (0, None) or a.get("error"):
+      if a.get("stopped"):
+        cut_off += 1
+      elif a.get("rc") not in (0, None) or a.get("error"):
         reason = ((a.get("error") or "").strip().splitlines()[-1:] or [""])[0][:160]
         lines.append(f"- `{cid}` attempt {i} on {a.get('worker') or '?'}: rc {a.get('rc')}, {a.get('phase')}: {reason}")
+  if cut_off:
+    lines.insert(1, f"- {cut_off} attempts were cut off by the study stopping (its process ended, e.g. the machine "
+                    "went back) and started again when it resumed; they are not failures.")
   return lines
 
 
