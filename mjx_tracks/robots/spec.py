@@ -141,7 +141,6 @@ class RobotSpec:
     for group, angle in by_group.items():
       index = self.joint_index(group)
       if xp is np:
-        values = values.copy()
         values[index] = angle
       else:
         values = values.at[index].set(xp.asarray(angle, xp.float32))

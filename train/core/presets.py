@@ -160,18 +160,27 @@ def _hp_value(key: str, text: str, default):
   elif isinstance(default, int):
     ok = isinstance(value, int) and not isinstance(value, bool) and value >= (0 if key in HP_ZERO_OK else 1)
   elif isinstance(default, float):
-    high = 1.0 if key in HP_AT_MOST_ONE else float("inf")
-    low_ok = (lambda v: v > 0) if key in HP_POSITIVE else (lambda v: True) if key in HP_SIGNED else (lambda v: v >= 0)
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) \
-        and low_ok(value) and value <= high
+        and _float_rule(key)[0](value)
     value = float(value) if ok else value
   else:  # layer widths
     ok = isinstance(value, list) and bool(value) and all(isinstance(v, int) and v > 0 for v in value)
     value = tuple(value) if ok else value
   if not ok:
     want = {bool: "true or false", int: f"a whole number >= {0 if key in HP_ZERO_OK else 1}",
-            float: ("a number in (0, 1]" if key in HP_POSITIVE else "a number in [0, 1]") if key in HP_AT_MOST_ONE
-            else "a number > 0" if key in HP_POSITIVE else "a number" if key in HP_SIGNED else "a number >= 0"}.get(
-                type(default), "a list of widths, e.g. [64, 64]")
+            float: _float_rule(key)[1]}.get(type(default), "a list of widths, e.g. [64, 64]")
     raise ValueError(f"--hp {key}: {want}, got {text!r}")
   return value
+
+
+def _float_rule(key: str):
+  """(accepts(value), what it accepts in words) for a float field: HP_SIGNED any number,
+  HP_POSITIVE > 0, the others >= 0; HP_AT_MOST_ONE also at most 1."""
+  positive = key in HP_POSITIVE
+  if key in HP_AT_MOST_ONE:
+    return (lambda v: (v > 0 if positive else v >= 0) and v <= 1.0), f"a number in {'(' if positive else '['}0, 1]"
+  if positive:
+    return (lambda v: v > 0), "a number > 0"
+  if key in HP_SIGNED:
+    return (lambda v: True), "a number"
+  return (lambda v: v >= 0), "a number >= 0"

@@ -24,7 +24,7 @@ import time
 import numpy as np
 from flax import serialization
 
-from train.core.checkpoints import CheckpointError, unreadable_warning
+from train.core.checkpoints import CheckpointError, checkpoint_dir, saved_steps, unreadable_warning
 from train.core.plan import RunError, RunPlan
 from train.core.sb3_env import TaskVecEnv, episode_metrics
 from train.core.sb3_export import network_spec, policy_params
@@ -53,7 +53,6 @@ class Checkpoints:
   """RUN/checkpoints/<step>/ of an SB3 run: save (atomic, the newest `keep` kept) and load."""
 
   def __init__(self, run_dir: str, keep: int):
-    from train.core.checkpoints import checkpoint_dir  # noqa: PLC0415
     self.run_dir, self.dir, self.keep = run_dir, checkpoint_dir(run_dir), keep
 
   def save(self, model, venv: TaskVecEnv, step: int) -> str:
@@ -72,8 +71,7 @@ class Checkpoints:
     return final
 
   def steps(self) -> list[int]:
-    from train.core.checkpoints import saved_steps  # noqa: PLC0415  (a step's folder is named by its number alone)
-    return saved_steps(self.run_dir)
+    return saved_steps(self.run_dir)  # a step's folder is named by its number alone
 
   def load(self, plan: RunPlan, venv: TaskVecEnv, say=lambda m: print(m, file=sys.stderr)):
     """(model, step) of the newest checkpoint that reads back whole, with its replay buffer and
@@ -103,7 +101,7 @@ def load_model(algo: str, checkpoint: str, venv: TaskVecEnv | None = None):
 def checkpoint_policy(run_dir: str, algo: str, step: int):
   """(network spec, (normalizer, policy) parameters) of the deterministic policy in an SB3 run's
   checkpoint at `step` (train.evaluate --checkpoint), as export() would write it."""
-  model = load_model(algo, os.path.join(Checkpoints(run_dir, 1).dir, str(step)))
+  model = load_model(algo, os.path.join(checkpoint_dir(run_dir), str(step)))
   spec = _spec(algo, model)
   return spec, policy_params(algo, model, spec)
 
