@@ -17,6 +17,10 @@ Incremental, variant `paper_literal`: eq. 6 as printed,
 Incremental, variant `original_code`: the original's code, difficulty-coordinate mean eps Delta
                with a narrower sigma = eps Delta / 4.
 Integer components are rounded after clipping.
+
+A `Draw` is a sampler and its ranges as data (array bounds, a uniform flag): one compiled program
+draws any of them (every evaluation scene of a kind: uniform, incremental, hardest, a held-out
+configuration as a range of width 0), where `sample` takes them as constants of the program.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 import numpy as np
+from flax import struct
 
 SAMPLERS = ("uniform", "incremental")
 VARIANTS = ("difficulty", "paper_literal", "original_code")
@@ -70,42 +75,78 @@ class Ranges:
     return np.where(self.direction > 0, self.high, self.low).astype(np.float32)
 
 
-def _finish(xi: jax.Array, r: Ranges) -> jax.Array:
-  lo, hi = jnp.asarray(r.low, jnp.float32), jnp.asarray(r.high, jnp.float32)
+@struct.dataclass
+class Draw:
+  """A sampler and its ranges as data: xi ~ U(low, high) if uniform, else the incremental sampler
+  on [low, high] (the hard ends and integer components stay those of the kind's Ranges)."""
+
+  low: jax.Array  # (k,) xi_min
+  high: jax.Array  # (k,) xi_max
+  uniform: jax.Array  # () bool: the uniform sampler, else the incremental one
+
+
+def as_draw(r: Ranges, sampler: str) -> Draw:
+  """The draw of sampler over r, as data."""
+  if sampler not in SAMPLERS:
+    raise ValueError(f"unknown sampler {sampler!r}; known: {SAMPLERS}")
+  return Draw(low=jnp.asarray(r.low, jnp.float32), high=jnp.asarray(r.high, jnp.float32),
+              uniform=jnp.bool_(sampler == "uniform"))
+
+
+def _finish(xi: jax.Array, r: Ranges, lo: jax.Array | None = None, hi: jax.Array | None = None) -> jax.Array:
+  lo = jnp.asarray(r.low, jnp.float32) if lo is None else lo
+  hi = jnp.asarray(r.high, jnp.float32) if hi is None else hi
   xi = jnp.clip(xi, lo, hi)
   return jnp.where(jnp.asarray(r.integer), jnp.round(xi), xi)
 
 
-def uniform(key: jax.Array, r: Ranges) -> jax.Array:
-  """xi_i ~ U(min, max); integer components uniform over {min, ..., max}."""
-  lo, hi = jnp.asarray(r.low, jnp.float32), jnp.asarray(r.high, jnp.float32)
+def _uniform(key: jax.Array, r: Ranges, lo: jax.Array, hi: jax.Array) -> jax.Array:
   u = jax.random.uniform(key, lo.shape)
   cont = lo + u * (hi - lo)
   disc = jnp.floor(lo + u * (hi - lo + 1.0))
-  return _finish(jnp.where(jnp.asarray(r.integer), disc, cont), r)
+  return _finish(jnp.where(jnp.asarray(r.integer), disc, cont), r, lo, hi)
 
 
-def gaussian_moments(eps: jax.Array, r: Ranges, variant: str) -> tuple[jax.Array, jax.Array]:
-  """(mean, std) of the unclipped Gaussian of a variant at difficulty eps, in xi's own units."""
+def uniform(key: jax.Array, r: Ranges) -> jax.Array:
+  """xi_i ~ U(min, max); integer components uniform over {min, ..., max}."""
+  return _uniform(key, r, jnp.asarray(r.low, jnp.float32), jnp.asarray(r.high, jnp.float32))
+
+
+def _moments(eps: jax.Array, r: Ranges, variant: str, lo: jax.Array, hi: jax.Array) -> tuple[jax.Array, jax.Array]:
   if variant not in VARIANTS:
     raise ValueError(f"unknown incremental variant {variant!r}; known: {VARIANTS}")
   eps = jnp.clip(eps, 0.0, 1.0)
-  delta = jnp.asarray(r.delta)
+  delta = hi - lo
   if variant == "paper_literal":
-    return jnp.asarray(r.low, jnp.float32) + eps * delta, jnp.sqrt(eps * delta)
-  mean = jnp.asarray(r.easiest) + jnp.asarray(r.direction) * eps * delta
+    return lo + eps * delta, jnp.sqrt(eps * delta)
+  direction = jnp.asarray(r.direction)
+  mean = jnp.where(direction > 0, lo, hi) + direction * eps * delta  # from the easy end toward the hard one
   std = jnp.sqrt(eps * delta) if variant == "difficulty" else eps * delta / 4.0
   return mean, std
 
 
+def gaussian_moments(eps: jax.Array, r: Ranges, variant: str) -> tuple[jax.Array, jax.Array]:
+  """(mean, std) of the unclipped Gaussian of a variant at difficulty eps, in xi's own units."""
+  return _moments(eps, r, variant, jnp.asarray(r.low, jnp.float32), jnp.asarray(r.high, jnp.float32))
+
+
+def _incremental(key: jax.Array, eps: jax.Array, r: Ranges, variant: str, lo: jax.Array, hi: jax.Array) -> jax.Array:
+  mean, std = _moments(eps, r, variant, lo, hi)
+  return _finish(mean + std * jax.random.normal(key, mean.shape), r, lo, hi)
+
+
 def incremental(key: jax.Array, eps: jax.Array, r: Ranges, variant: str) -> jax.Array:
   """Incremental Gaussian sample at difficulty eps in [0, 1] (formulas in the module docstring)."""
-  mean, std = gaussian_moments(eps, r, variant)
-  return _finish(mean + std * jax.random.normal(key, mean.shape), r)
+  return _incremental(key, eps, r, variant, jnp.asarray(r.low, jnp.float32), jnp.asarray(r.high, jnp.float32))
 
 
-def sample(key: jax.Array, eps: jax.Array, r: Ranges, sampler: str, variant: str) -> jax.Array:
-  """Dispatches on the (static) sampler name; variant is the incremental one (unused by uniform)."""
+def sample(key: jax.Array, eps: jax.Array, r: Ranges, sampler: str, variant: str, draw: Draw | None = None) -> jax.Array:
+  """Dispatches on the (static) sampler name; variant is the incremental one (unused by uniform).
+  With a draw, its sampler and bounds (data) replace sampler and r's bounds (r keeps the hard ends
+  and integer components): both samplers are computed, and the draw's flag picks one."""
+  if draw is not None:
+    lo, hi = draw.low, draw.high
+    return jnp.where(draw.uniform, _uniform(key, r, lo, hi), _incremental(key, eps, r, variant, lo, hi))
   if sampler == "uniform":
     return uniform(key, r)
   if sampler == "incremental":

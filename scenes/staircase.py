@@ -183,10 +183,11 @@ class StairScene:
   def stairs(self, xi: jax.Array) -> Staircase:
     return Staircase(tread=xi[0], riser=xi[1], steps=xi[2].astype(jnp.int32))
 
-  def sample(self, key: jax.Array, eps: jax.Array) -> SceneState:
-    """Draws xi, places the boxes, the spawn (ground point, yaw) and the goal."""
+  def sample(self, key: jax.Array, eps: jax.Array, draw: samplers.Draw | None = None) -> SceneState:
+    """Draws xi (from the draw, if given, instead of this scene's sampler and ranges), places the
+    boxes, the spawn (ground point, yaw) and the goal."""
     k_xi, *k_ends = jax.random.split(key, 5)
-    xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant)
+    xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant, draw)
     st = self.stairs(xi)
     pos, size = step_boxes(st, self.n_boxes)
     up = self.direction == "up"

@@ -143,43 +143,42 @@ def _policies(args, budgets: list[int | None], cfg: TaskConfig):
   return {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}, (lambda s: s.obs)
 
 
-def _evaluate(args, meta: dict, scene: str, budgets: list[int | None], cfg0: TaskConfig) -> list[str]:
-  """Runs one scene with the policy of each budget (one compilation); writes each report and its
-  trials; returns the summary lines."""
-  cfg = scene_config(cfg0, scene)
-  policies, observe = _policies(args, budgets, cfg)
-  print(f"{scene}: compiling and running {args.trials} trials of up to {cfg.episode.max_steps} steps "
-        f"({len(budgets)} polic{'y' if len(budgets) == 1 else 'ies'}; the first time on this machine takes "
-        "a minute or more) ...", file=sys.stderr, flush=True)
-  run = trial_runner(cfg, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video), observe)
-  lines = []
-  for budget, (_, params, policy_step) in policies.items():
-    per_trial, qpos, render_model = run(params)
-    out = _write_report(args, meta, scene, budget, policy_step, per_trial)
-    if args.video:
-      from mjx_tracks.tools.render import camera_for, render_frames, write_video  # noqa: PLC0415
-      shown = qpos[:int(per_trial["length"][0]) + 1]  # the reset, then trial 0 until its episode ended
-      frames = render_frames(render_model, shown, **camera_for(scene_kind(cfg.scene.kind).camera))
-      write_video(args.video, frames, fps=1 / cfg.control.period)
-    lines.append(_summary(meta["task"], scene, budget, args.trials, per_trial, out))
-  return lines
-
-
-def _evaluate_robustness(args, meta: dict, base: str, budgets: list[int | None], cfg0: TaskConfig) -> list[str]:
-  """Every robustness case on scene `base` with the policy of each budget, in one batch and one
-  compilation (robustness_runner); writes each case's report (scene BASE+CASE) and its trials."""
-  policies, observe = _policies(args, budgets, scene_config(cfg0, base))
-  cases = [c.name for c in cfg0.evaluation.robustness]
-  print(f"{base}: compiling and running {len(cases)} robustness cases x {args.trials} trials in one batch ...",
-        file=sys.stderr, flush=True)
-  run = robustness_runner(cfg0, base, policies[budgets[0]][0], args.trials, args.eps, args.seed, observe)
-  lines = []
-  for budget, (_, params, policy_step) in policies.items():
-    for case, per_trial in run(params).items():
-      scene = f"{base}{ROBUST}{case}"
+def _evaluate(args, meta: dict, scenes: list[str], budgets: list[int | None], cfg0: TaskConfig):
+  """Runs each scene with the policy of each budget (one compilation per program of
+  scene_programs: one for every scene of a stair task); writes each report and its trials; yields
+  the summary lines."""
+  policies, observe = _policies(args, budgets, cfg0)
+  run = trial_runner(cfg0, scenes, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video), observe)
+  for scene in scenes:
+    print(f"{scene}: running {args.trials} trials of up to {cfg0.episode.max_steps} steps ({len(budgets)} "
+          f"polic{'y' if len(budgets) == 1 else 'ies'}; compiling first where no scene before it shares its "
+          "program: a minute or more the first time on this machine) ...", file=sys.stderr, flush=True)
+    for budget, (_, params, policy_step) in policies.items():
+      per_trial, qpos, render_model = run(params, scene)
       out = _write_report(args, meta, scene, budget, policy_step, per_trial)
-      lines.append(_summary(meta["task"], scene, budget, args.trials, per_trial, out))
-  return lines
+      if args.video:
+        from mjx_tracks.tools.render import camera_for, render_frames, write_video  # noqa: PLC0415
+        shown = qpos[:int(per_trial["length"][0]) + 1]  # the reset, then trial 0 until its episode ended
+        frames = render_frames(render_model, shown, **camera_for(scene_kind(cfg0.scene.kind).camera))
+        write_video(args.video, frames, fps=1 / cfg0.control.period)
+      yield _summary(meta["task"], scene, budget, args.trials, per_trial, out)
+
+
+def _evaluate_robustness(args, meta: dict, bases: list[str], budgets: list[int | None], cfg0: TaskConfig):
+  """Every robustness case on each scene of `bases` with the policy of each budget, the cases of a
+  base in one batch, the bases in one compilation where they share a program (robustness_runner);
+  writes each case's report (scene BASE+CASE) and its trials; yields the summary lines."""
+  policies, observe = _policies(args, budgets, cfg0)
+  cases = [c.name for c in cfg0.evaluation.robustness]
+  run = robustness_runner(cfg0, bases, policies[budgets[0]][0], args.trials, args.eps, args.seed, observe)
+  for base in bases:
+    print(f"{base}: running {len(cases)} robustness cases x {args.trials} trials in one batch ...",
+          file=sys.stderr, flush=True)
+    for budget, (_, params, policy_step) in policies.items():
+      for case, per_trial in run(params, base).items():
+        scene = f"{base}{ROBUST}{case}"
+        out = _write_report(args, meta, scene, budget, policy_step, per_trial)
+        yield _summary(meta["task"], scene, budget, args.trials, per_trial, out)
 
 
 def _write_report(args, meta: dict, scene: str, budget: int | None, policy_step, per_trial: dict) -> str:
@@ -219,9 +218,9 @@ def _summary(task: str, scene: str, budget: int | None, trials: int, per_trial: 
   return f"{task} {scene}{at}: {trials} trials, {', '.join(figures)} -> {out}"
 
 
-def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None], bool]]:
-  """(scene, milestone budgets with None for the final policy, whether the scene is a base scene of
-  the robustness suite: every case on it in one batch) to evaluate; ValueError on bad input."""
+def _jobs(args, cfg: TaskConfig) -> tuple[list[str], list[str], list[int | None]]:
+  """(scenes, base scenes of the robustness suite: every case on each in one batch, milestone
+  budgets with None for the final policy) to evaluate; ValueError on bad input."""
   if args.scene is not None and (args.suite or args.robustness):
     raise ValueError("--scene names one scene; --suite and --robustness name theirs: give one of them")
   scenes = suite_scenes(cfg) if args.suite else [] if args.robustness else [args.scene or "hardest"]
@@ -239,7 +238,7 @@ def _jobs(args, cfg: TaskConfig) -> list[tuple[str, list[int | None], bool]]:
     budgets = [*saved_milestones(args.run_dir), None]
   if len(scenes) * len(budgets) > 1 and (args.out or args.video):
     raise ValueError("--out and --video take one scene and one policy")
-  return [(scene, budgets, False) for scene in scenes] + [(base, budgets, True) for base in bases]
+  return scenes, bases, budgets
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -260,10 +259,11 @@ def main(argv: list[str] | None = None) -> int:
     else:
       meta = read_run_record(args.run_dir)
     cfg = from_dict(meta["config"])
-    for scene, budgets, robust in _jobs(args, cfg):
-      for line in (_evaluate_robustness(args, meta, scene, budgets, cfg) if robust else
-                   _evaluate(args, meta, scene, budgets, cfg)):
-        print(line, flush=True)
+    scenes, bases, budgets = _jobs(args, cfg)
+    for line in _evaluate(args, meta, scenes, budgets, cfg) if scenes else ():
+      print(line, flush=True)
+    for line in _evaluate_robustness(args, meta, bases, budgets, cfg) if bases else ():
+      print(line, flush=True)
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2

@@ -98,20 +98,22 @@ def add_step(acc: dict, state, active):
 
 
 def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=lambda s: s.obs, core=None):
-  """(core, rollout): the task env and a pure rollout(params, keys[, perturbations]) -> (sums, qpos
-  of trial 0 per step, trial 0's scene), one episode per trial from `core.reset_at(key, eps)` (with
-  each trial's perturbation, if given) with actions `make_act(params)(observe(state))` (a policy
-  sees the observation; a scripted controller may see the whole state); sums holds each trial's
-  METRICS sums, length and final chassis position. core: the env (default TrackedRobotEnv(cfg))."""
+  """(core, rollout): the task env and a pure rollout(params, keys[, perturbations[, draw]]) ->
+  (sums, qpos of trial 0 per step, trial 0's scene), one episode per trial from
+  `core.reset_at(key, eps)` (with each trial's perturbation and the scene draw, if given) with
+  actions `make_act(params)(observe(state))` (a policy sees the observation; a scripted controller
+  may see the whole state); sums holds each trial's METRICS sums, length and final chassis
+  position. core: the env (default TrackedRobotEnv(cfg))."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   core = TrackedRobotEnv(cfg) if core is None else core
 
-  def rollout(params, keys, perturbations=None):
+  def rollout(params, keys, perturbations=None, draw=None):
     act = make_act(params)
-    s = jax.vmap(core.reset_at, in_axes=(0, None, None, 0))(keys, jnp.float32(eps), jnp.float32(1.0), perturbations)
+    reset = jax.vmap(core.reset_at, in_axes=(0, None, None, 0, None))
+    s = reset(keys, jnp.float32(eps), jnp.float32(1.0), perturbations, draw)
 
     def body(carry, _):
       s, acc, active = carry
@@ -124,6 +126,26 @@ def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=la
     return acc, jnp.concatenate([s.pipeline_state.data.qpos[:1], qpos]), scene0
 
   return core, rollout
+
+
+def scene_programs(cfg0: TaskConfig, scenes: list[str], config=None) -> list[tuple[TaskConfig, dict]]:
+  """[(the config of one compiled program, {scene: its draw})] evaluating task cfg0's scenes:
+  scenes whose configs (config(cfg0, scene), default scene_config) differ only in the keys their
+  kind takes as data (SceneKind.drawn: a stair task's sampler and ranges) share one program and
+  pass their draw; any other scene gets a program of its own (draw None)."""
+  import dataclasses  # noqa: PLC0415
+  config = scene_config if config is None else config
+  kind = scene_kind(cfg0.scene.kind)
+  groups: list[tuple[TaskConfig, list[tuple[str, TaskConfig]]]] = []
+  for scene in scenes:
+    cfg = config(cfg0, scene)
+    key = replace_scene(cfg, **{k: getattr(cfg0.scene, k) for k in kind.drawn})
+    members = next((m for k, m in groups if k == key), None)
+    if members is None:
+      groups.append((key, members := []))
+    members.append((scene, cfg))
+  return [(dataclasses.replace(key, scene=kind.program_section([c.scene for _, c in members])),
+           {scene: kind.draw(c.scene) for scene, c in members}) for key, members in groups]
 
 
 def trial_keys(trials: int, seed: int = EVAL_SEED):
@@ -139,16 +161,23 @@ def per_trial_figures(acc) -> dict:
   return {**episode_figures(acc, acc["length"]), "final_x": final[:, 0], "final_y": final[:, 1], "final_z": final[:, 2]}
 
 
-def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, record: bool = False,
-                 observe=lambda s: s.obs):
-  """run(params) -> (per-trial figures with each trial's final chassis position, qpos of trial 0 at
-  every step and a C model of its scene if record): compiled once, for every policy of one network."""
+def trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps: float, seed: int,
+                 record: bool = False, observe=lambda s: s.obs):
+  """run(params, scene) -> (per-trial figures with each trial's final chassis position, qpos of
+  trial 0 at every step and a C model of its scene if record) on any of `scenes` (evaluation
+  scenes of task cfg0): compiled once per program of scene_programs (one for every scene of a stair
+  task), for every policy of one network."""
   import jax  # noqa: PLC0415
-  core, rollout = trial_rollout(cfg, make_act, trials, eps, observe)
-  compiled, keys = jax.jit(rollout), trial_keys(trials, seed)
+  keys = trial_keys(trials, seed)
+  programs = {}
+  for cfg, draws in scene_programs(cfg0, scenes):
+    core, rollout = trial_rollout(cfg, make_act, trials, eps, observe)
+    compiled = jax.jit(rollout)
+    programs.update({scene: (core, compiled, draw) for scene, draw in draws.items()})
 
-  def run(params):
-    acc, qpos, scene0 = compiled(params, keys)
+  def run(params, scene: str):
+    core, compiled, draw = programs[scene]
+    acc, qpos, scene0 = compiled(params, keys, None, draw)
     # trial 0's scene in a C model, for rendering its recorded qpos
     render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size, scene0.box_yaw) if record else None
     return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
@@ -156,27 +185,33 @@ def trial_runner(cfg: TaskConfig, make_act, trials: int, eps: float, seed: int, 
   return run
 
 
-def robustness_runner(cfg: TaskConfig, base: str, make_act, trials: int, eps: float, seed: int,
+def robustness_runner(cfg0: TaskConfig, bases: list[str], make_act, trials: int, eps: float, seed: int,
                       observe=lambda s: s.obs):
-  """run(params) -> {case: per-trial figures}: every case of the robustness suite on scene `base`,
-  trials each, in one batch and one program (the perturbations are data: TrackedRobotEnv
-  every_path). Every case sees the same scenes and starts (common random numbers: paired trials)."""
+  """run(params, base) -> {case: per-trial figures}: every case of the robustness suite on scene
+  `base` (one of bases), trials each, in one batch (the perturbations are data: TrackedRobotEnv
+  every_path) and one program for the bases of one program of scene_programs. Every case sees the
+  same scenes and starts (common random numbers: paired trials)."""
   import jax  # noqa: PLC0415
   import jax.numpy as jnp  # noqa: PLC0415
 
   from mjx_tracks.envs.randomization import task_draw  # noqa: PLC0415
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
-  names = [c.name for c in cfg.evaluation.robustness]
-  cases = [scene_config(cfg, f"{base}{ROBUST}{name}") for name in names]
-  core = TrackedRobotEnv(cases[0], every_path=True)
+  names = [c.name for c in cfg0.evaluation.robustness]
   keys = trial_keys(trials, seed)
-  perts = [jax.vmap(lambda k, c=c: task_draw(c, k, jnp.float32(eps), core.sim.layout.n_joints))(keys) for c in cases]
-  perts = jax.tree_util.tree_map(lambda *x: jnp.concatenate(x), *perts)
-  _, rollout = trial_rollout(cases[0], make_act, trials * len(cases), eps, observe, core)
-  compiled, all_keys = jax.jit(rollout), jnp.tile(keys, (len(cases), 1))
+  programs = {}
+  for cfg, draws in scene_programs(cfg0, bases):
+    cases = [perturbed(cfg, name) for name in names]
+    core = TrackedRobotEnv(cases[0], every_path=True)
+    perts = [jax.vmap(lambda k, c=c: task_draw(c, k, jnp.float32(eps), core.sim.layout.n_joints))(keys) for c in cases]
+    perts = jax.tree_util.tree_map(lambda *x: jnp.concatenate(x), *perts)
+    _, rollout = trial_rollout(cases[0], make_act, trials * len(cases), eps, observe, core)
+    compiled = jax.jit(rollout)
+    programs.update({base: (compiled, perts, draw) for base, draw in draws.items()})
+  all_keys = jnp.tile(keys, (len(names), 1))
 
-  def run(params):
-    acc, _, _ = compiled(params, all_keys, perts)
+  def run(params, base: str):
+    compiled, perts, draw = programs[base]
+    acc, _, _ = compiled(params, all_keys, perts, draw)
     figures = per_trial_figures(acc)
     return {name: {k: v[i * trials:(i + 1) * trials] for k, v in figures.items()} for i, name in enumerate(names)}
 

@@ -29,6 +29,7 @@ from mjx_tracks.sim.pose import chassis_rpy
 from mjx_tracks.sim.simulator import Simulator
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
+from scenes.samplers import Draw
 from scenes.scene import SceneState
 from scenes.kinds import scene_kind
 from scenes.staircase import StairScene, Staircase
@@ -145,11 +146,12 @@ class TrackedRobotEnv(Env):
 
   # --- the curriculum wrapper's reset -------------------------------------------------------
   def reset_at(self, rng: jax.Array, eps: jax.Array, penalty_k: jax.Array,
-               perturbation: rnd.Perturbation | None = None) -> State:
+               perturbation: rnd.Perturbation | None = None, draw: Draw | None = None) -> State:
     """Draws a scene at difficulty eps and places the robot at its spawn; with randomization, the
-    episode's perturbation is drawn too (or given)."""
+    episode's perturbation is drawn too (or given). draw: the scene's sampler and ranges as data
+    (where the kind takes them: SceneKind.drawn), instead of the task's."""
     k_scene, k_obs, k_next = jax.random.split(rng, 3)
-    scene = self.scene.sample(k_scene, eps)
+    scene = self.scene.sample(k_scene, eps) if draw is None else self.scene.sample(k_scene, eps, draw)
     robust = None
     if self.randomized:  # its own stream: the paper's tasks draw as before
       p = perturbation if perturbation is not None else self.draw_perturbation(rng, eps)

@@ -33,6 +33,8 @@ class SceneKind:
   distances: tuple[str, ...] = ("euclidean",)  # goal distances it measures (episode.distance; config.DISTANCES)
   parameters: str = ""  # one line for the README / dashboard: what its xi holds
   stair_script: bool = False  # whether the stair script (the `scripted` baseline, mjx_tracks.baselines) fits it
+  drawn: tuple[str, ...] = ()  # scene-section keys its generator also takes as data (draw): evaluation scenes
+  #                              that differ only in these share one compiled program (train.evaluation)
 
   def collision_geoms(self, scene) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Geom names of its world that (any part of the robot, any part but a track belt) must not
@@ -54,6 +56,16 @@ class SceneKind:
   def make(self, s: SceneConfig):
     """The scene generator (world_xml(), sample(key, eps) -> SceneState) of a scene section."""
     raise NotImplementedError
+
+  def draw(self, s: SceneConfig):
+    """The `drawn` keys of a scene section as data (a scenes.samplers.Draw), for its generator's
+    sample(key, eps, draw); None where the kind takes none."""
+    return None
+
+  def program_section(self, sections: list[SceneConfig]) -> SceneConfig:
+    """The scene section of one program that draws each of sections (equal but for `drawn`) from
+    its draw: the first, where the kind takes no draw."""
+    return sections[0]
 
   def suite(self, cfg: TaskConfig) -> list[str]:
     """The evaluation scenes of a study's suite."""

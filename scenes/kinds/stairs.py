@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from scenes.kinds.base import HARDEST, HELD_OUT, NAV, SceneKind, replace_scene
 from scenes.terrain_kinds import STAIRS
 
@@ -18,6 +20,7 @@ class Stairs(SceneKind):
   signals = ("pitch_rate", "cog_deviation", "on_stairs")
   parameters = "scene.tread, scene.riser, scene.steps ranges; scene.direction up | down"
   stair_script = True
+  drawn = ("sampler", "tread", "riser", "steps")  # every evaluation scene of a stair task: one program
 
   def has_hardest(self, s) -> bool:
     return True
@@ -26,6 +29,17 @@ class Stairs(SceneKind):
     from scenes.staircase import StairScene, stair_ranges  # noqa: PLC0415
     return StairScene(s.direction, s.sampler, s.variant, stair_ranges(s.tread, s.riser, s.steps),
                       s.random_spawn, s.random_goal)
+
+  def draw(self, s):
+    from scenes.samplers import as_draw  # noqa: PLC0415
+    from scenes.staircase import stair_ranges  # noqa: PLC0415
+    return as_draw(stair_ranges(s.tread, s.riser, s.steps), s.sampler)
+
+  def program_section(self, sections):
+    """The first section, its ranges widened to hold all of them (its box pool: the most steps)."""
+    def envelope(name):
+      return min(getattr(s, name)[0] for s in sections), max(getattr(s, name)[1] for s in sections)
+    return dataclasses.replace(sections[0], **{n: envelope(n) for n in STAIRS.names})
 
   def suite(self, cfg) -> list[str]:
     return ["hardest", "uniform", *(HELD_OUT + h.name for h in cfg.evaluation.held_out)]

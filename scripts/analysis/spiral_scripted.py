@@ -73,11 +73,12 @@ def make_act(core: TrackedRobotEnv, up: bool, lane: float):
 
 def run(task: str, scene: str, lane: float, trials: int, gif: str | None) -> dict:
   """One scene of one task with one lane: the trials' mean figures."""
-  cfg = scene_config(load_config(task), scene)
+  task_cfg = load_config(task)
+  cfg = scene_config(task_cfg, scene)
   core = TrackedRobotEnv(cfg)
-  runner = trial_runner(cfg, make_act(core, cfg.scene.terrains[0] == "spiral_up", lane), trials, 1.0, 1,
+  runner = trial_runner(task_cfg, [scene], make_act(core, cfg.scene.terrains[0] == "spiral_up", lane), trials, 1.0, 1,
                         record=bool(gif), observe=lambda s: s)
-  figs, qpos, model = runner(None)
+  figs, qpos, model = runner(None, scene)
   if gif:
     from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
     shown = qpos[:int(figs["length"][0]) + 1]

@@ -38,14 +38,15 @@ def rows_for(task: str, scenes: list[str], trials: int) -> list[dict]:
   from mjx_tracks.envs.config import load_config  # noqa: PLC0415
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   from mjx_tracks.metrics import EPISODE_NAMES  # noqa: PLC0415
-  from train.evaluation import EVAL_EPS, EVAL_SEED, scene_config, trial_runner  # noqa: PLC0415
+  from train.evaluation import EVAL_EPS, EVAL_SEED, trial_runner  # noqa: PLC0415
   rows = []
+  task_cfg = load_config(task)
+  names = baselines_for(task_cfg)
+  run = trial_runner(task_cfg, scenes, switch_act(TrackedRobotEnv(task_cfg), names), trials, EVAL_EPS, EVAL_SEED,
+                     observe=lambda s: s)  # one program for every scene of a stair task
   for scene in scenes:
-    cfg = scene_config(load_config(task), scene)
-    names = baselines_for(cfg)
-    run = trial_runner(cfg, switch_act(TrackedRobotEnv(cfg), names), trials, EVAL_EPS, EVAL_SEED, observe=lambda s: s)
     for i, name in enumerate(names):
-      per_trial, _, _ = run(jnp.int32(i))
+      per_trial, _, _ = run(jnp.int32(i), scene)
       rows.append({"task": task, "scene": scene, "policy": name, "trials": trials,
                    **{k: float(np.mean(per_trial[k])) for k in EPISODE_NAMES}})
       print(json.dumps(rows[-1]), flush=True)

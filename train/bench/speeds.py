@@ -49,13 +49,15 @@ def rows_for(task: str, scene: str, speeds: list[float], raised: str, trials: in
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   from mjx_tracks.metrics import EPISODE_NAMES  # noqa: PLC0415
   from train.evaluation import EVAL_EPS, EVAL_SEED, scene_config, trial_runner  # noqa: PLC0415
-  cfg = scene_config(load_config(task), scene)
+  task_cfg = load_config(task)
+  cfg = scene_config(task_cfg, scene)
   core = TrackedRobotEnv(cfg)
   actions = [constant_action(cfg, core, v, raised) for v in speeds]  # every input checked before compiling
-  run = trial_runner(cfg, lambda action: constant_act(core, action), trials, EVAL_EPS, EVAL_SEED, observe=lambda s: s)
+  run = trial_runner(task_cfg, [scene], lambda action: constant_act(core, action), trials, EVAL_EPS, EVAL_SEED,
+                     observe=lambda s: s)
   rows = []
   for speed, action in zip(speeds, actions):
-    per_trial, _, _ = run(action)
+    per_trial, _, _ = run(action, scene)
     rows.append({"task": task, "scene": scene, "speed": speed, "raised": raised or None, "trials": trials,
                  **{k: float(np.mean(per_trial[k])) for k in EPISODE_NAMES}})
     print(json.dumps(rows[-1]), flush=True)

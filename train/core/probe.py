@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from mjx_tracks.metrics import REPORT_COLUMN as COLUMNS  # per-trial figure -> report column
-from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_config, trial_runner
+from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, trial_runner
 from train.core.mesh import to_host
 from train.core.policy import act_from_params
 
@@ -21,8 +21,9 @@ class Probe:
 
   def __init__(self, t, trials: int = EVAL_TRIALS):
     self._params = t.learner.policy_params
-    self._run = trial_runner(scene_config(t.plan.cfg, t.plan.cfg.scene.probe_scene), act_from_params(t.spec), trials, EVAL_EPS, EVAL_SEED)
+    self._scene = t.plan.cfg.scene.probe_scene
+    self._run = trial_runner(t.plan.cfg, [self._scene], act_from_params(t.spec), trials, EVAL_EPS, EVAL_SEED)
 
   def __call__(self, state) -> dict[str, float]:
-    fig, _, _ = self._run(to_host(self._params(state)))
+    fig, _, _ = self._run(to_host(self._params(state)), self._scene)
     return {PREFIX + column: float(np.mean(fig[name])) for name, column in COLUMNS.items()}
