@@ -96,11 +96,12 @@ class NavScene:
     <geom name="wall_front" type="plane" pos="{AREA_LEN} 0 0" zaxis="-1 0 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
     {boxes}"""
 
-  def sample(self, key: jax.Array, eps: jax.Array) -> SceneState:
+  def sample(self, key: jax.Array, eps: jax.Array, draw: samplers.Draw | None = None) -> SceneState:
+    """Draws the area and its layout (with a draw: its sampler and the areas it allows)."""
     k_kind, k_u, k_x, k_s, k_g = jax.random.split(key, 5)
     kinds = jnp.array([{"hallway": 0, "zigzag": 1}[k] for k in self.kinds])
-    variant = kinds[jax.random.randint(k_kind, (), 0, len(self.kinds))]
-    u = samplers.sample(k_u, eps, UNIT, self.sampler, self.variant)
+    variant = kinds[samplers.pick_kind(k_kind, len(self.kinds), draw)]
+    u = samplers.sample(k_u, eps, UNIT, self.sampler, self.variant, draw)
     c = _lerp(*self.gap, u[4])
     w1 = _lerp(AREA_W / 2 - c / 2, AREA_W - c, u[0])
     half_w = AREA_W / 2

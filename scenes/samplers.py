@@ -83,14 +83,24 @@ class Draw:
   low: jax.Array  # (k,) xi_min
   high: jax.Array  # (k,) xi_max
   uniform: jax.Array  # () bool: the uniform sampler, else the incremental one
+  kinds: jax.Array | None = None  # (K,) bool: the sub-kinds (terrain kinds, areas) an episode may draw; None: all
 
 
-def as_draw(r: Ranges, sampler: str) -> Draw:
-  """The draw of sampler over r, as data."""
+def as_draw(r: Ranges, sampler: str, kinds=None) -> Draw:
+  """The draw of sampler over r, as data; kinds: which of the generator's sub-kinds it may draw."""
   if sampler not in SAMPLERS:
     raise ValueError(f"unknown sampler {sampler!r}; known: {SAMPLERS}")
   return Draw(low=jnp.asarray(r.low, jnp.float32), high=jnp.asarray(r.high, jnp.float32),
-              uniform=jnp.bool_(sampler == "uniform"))
+              uniform=jnp.bool_(sampler == "uniform"), kinds=None if kinds is None else jnp.asarray(kinds, bool))
+
+
+def pick_kind(key: jax.Array, n: int, draw: Draw | None = None) -> jax.Array:
+  """A sub-kind index ~ U{0..n-1}; with a draw's kinds, uniform over those it allows (the same index
+  from the same key where it allows all)."""
+  if draw is None or draw.kinds is None:
+    return jax.random.randint(key, (), 0, n)
+  i = jax.random.randint(key, (), 0, jnp.sum(draw.kinds))
+  return jnp.nonzero(draw.kinds, size=n)[0][i]
 
 
 def _finish(xi: jax.Array, r: Ranges, lo: jax.Array | None = None, hi: jax.Array | None = None) -> jax.Array:

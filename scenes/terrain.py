@@ -216,11 +216,12 @@ class TerrainScene:
                 for i, k in enumerate(self.kinds)]
     return jax.lax.switch(kind, [lambda xi, key, b=b: _flat(*b(xi, key)) for b in branches], xi, key)
 
-  def sample(self, key: jax.Array, eps: jax.Array) -> SceneState:
-    """Draws the kind and xi, lays the terrain out, the spawn (ground point, yaw) and the goal."""
+  def sample(self, key: jax.Array, eps: jax.Array, draw: samplers.Draw | None = None) -> SceneState:
+    """Draws the kind and xi (from the draw, if given: its sampler, ranges and the kinds it allows),
+    lays the terrain out, the spawn (ground point, yaw) and the goal."""
     k_kind, k_xi, k_layout, *k_ends = jax.random.split(key, 7)
-    kind = jax.random.randint(k_kind, (), 0, len(self.kinds))  # kind ~ U{kinds}
-    xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant)
+    kind = samplers.pick_kind(k_kind, len(self.kinds), draw)  # kind ~ U{kinds (the draw's)}
+    xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant, draw)
     pos, size, box_yaw, e = self.layout(kind, xi, k_layout)
     ahead = jnp.where(e.yaw == 0.0, 1.0, -1.0)
     spawn, yaw, goal = randomized_ends(k_ends, e.spawn, e.yaw, e.goal, ahead, self.random_spawn, self.random_goal)

@@ -144,8 +144,11 @@ def scene_programs(cfg0: TaskConfig, scenes: list[str], config=None) -> list[tup
     if members is None:
       groups.append((key, members := []))
     members.append((scene, cfg))
-  return [(dataclasses.replace(key, scene=kind.program_section([c.scene for _, c in members])),
-           {scene: kind.draw(c.scene) for scene, c in members}) for key, members in groups]
+  out = []
+  for key, members in groups:
+    program = dataclasses.replace(key, scene=kind.program_section(key.scene, [c.scene for _, c in members]))
+    out.append((program, {scene: kind.draw(c.scene, program.scene) for scene, c in members}))
+  return out
 
 
 def trial_keys(trials: int, seed: int = EVAL_SEED):

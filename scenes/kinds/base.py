@@ -57,15 +57,15 @@ class SceneKind:
     """The scene generator (world_xml(), sample(key, eps) -> SceneState) of a scene section."""
     raise NotImplementedError
 
-  def draw(self, s: SceneConfig):
-    """The `drawn` keys of a scene section as data (a scenes.samplers.Draw), for its generator's
-    sample(key, eps, draw); None where the kind takes none."""
+  def draw(self, s: SceneConfig, program: SceneConfig):
+    """The `drawn` keys of scene section s as data (a scenes.samplers.Draw) for the generator of
+    section `program` (program_section): its sample(key, eps, draw); None where the kind takes none."""
     return None
 
-  def program_section(self, sections: list[SceneConfig]) -> SceneConfig:
-    """The scene section of one program that draws each of sections (equal but for `drawn`) from
-    its draw: the first, where the kind takes no draw."""
-    return sections[0]
+  def program_section(self, task: SceneConfig, sections: list[SceneConfig]) -> SceneConfig:
+    """The scene section of one program that draws each of sections from its draw; sections equal
+    task but for `drawn` (task: theirs with the task's own values there). Default: task."""
+    return task
 
   def suite(self, cfg: TaskConfig) -> list[str]:
     """The evaluation scenes of a study's suite."""

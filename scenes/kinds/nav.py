@@ -23,6 +23,13 @@ class Nav(SceneKind):
     require("w" in CONTROL_MODES[cfg.control.mode], "control.mode", "navigation needs a mode with angular velocity w")
     no_held_out_staircases(cfg)
 
+  drawn = ("sampler", "nav_kinds")  # uniform and each area alone: one program (held-out areas change more)
+
+  def draw(self, s, program):
+    from scenes.navigation import UNIT  # noqa: PLC0415
+    from scenes.samplers import as_draw  # noqa: PLC0415
+    return as_draw(UNIT, s.sampler, [a in s.nav_kinds for a in program.nav_kinds])
+
   def make(self, s):
     from scenes.navigation import NavScene  # noqa: PLC0415
     return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,

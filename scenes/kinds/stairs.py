@@ -30,16 +30,16 @@ class Stairs(SceneKind):
     return StairScene(s.direction, s.sampler, s.variant, stair_ranges(s.tread, s.riser, s.steps),
                       s.random_spawn, s.random_goal)
 
-  def draw(self, s):
+  def draw(self, s, program):
     from scenes.samplers import as_draw  # noqa: PLC0415
     from scenes.staircase import stair_ranges  # noqa: PLC0415
     return as_draw(stair_ranges(s.tread, s.riser, s.steps), s.sampler)
 
-  def program_section(self, sections):
-    """The first section, its ranges widened to hold all of them (its box pool: the most steps)."""
+  def program_section(self, task, sections):
+    """The task's section, its ranges widened to hold every section's (its box pool: the most steps)."""
     def envelope(name):
       return min(getattr(s, name)[0] for s in sections), max(getattr(s, name)[1] for s in sections)
-    return dataclasses.replace(sections[0], **{n: envelope(n) for n in STAIRS.names})
+    return dataclasses.replace(task, **{n: envelope(n) for n in STAIRS.names})
 
   def suite(self, cfg) -> list[str]:
     return ["hardest", "uniform", *(HELD_OUT + h.name for h in cfg.evaluation.held_out)]

@@ -9,6 +9,15 @@ from scenes.kinds.base import HARDEST, HELD_OUT, NAV, SceneKind, no_held_out_sta
 from scenes.terrain_kinds import TERRAIN_PARAMS, corridor_world
 
 
+def _ranges(s, kinds: tuple[str, ...], own=None):
+  """The sampler ranges of xi for the given kinds, each kind's from section own where it draws it,
+  else from section s."""
+  from scenes.terrain import terrain_ranges  # noqa: PLC0415
+  own = s if own is None else own
+  return terrain_ranges(kinds, {k: dataclasses.asdict(getattr((own if k in own.terrains else s).terrain, k))
+                                for k in kinds})
+
+
 def pinned_terrain(cfg, kind: str, values):
   """The task with every episode on terrain `kind` with its parameters pinned to values (in the
   kind's order)."""
@@ -47,10 +56,18 @@ class Terrain(SceneKind):
               f"not supported by {list(kinds)}: spawns and goals lie on the stairs' centre line")
     no_held_out_staircases(cfg)
 
+  drawn = ("sampler", "terrains", "terrain")  # every evaluation scene of a terrain task: one program
+
   def make(self, s):
-    from scenes.terrain import TerrainScene, terrain_ranges  # noqa: PLC0415
-    ranges = terrain_ranges(s.terrains, {k: dataclasses.asdict(getattr(s.terrain, k)) for k in s.terrains})
-    return TerrainScene(s.terrains, s.sampler, s.variant, ranges, s.random_spawn, s.random_goal)
+    from scenes.terrain import TerrainScene  # noqa: PLC0415
+    return TerrainScene(s.terrains, s.sampler, s.variant, _ranges(s, s.terrains), s.random_spawn, s.random_goal)
+
+  def draw(self, s, program):
+    """In the program's xi layout (its kinds): s's ranges for the kinds s draws (only those allowed),
+    the program's for the others."""
+    from scenes.samplers import as_draw  # noqa: PLC0415
+    ranges = _ranges(program, program.terrains, own=s)
+    return as_draw(ranges, s.sampler, [k in s.terrains for k in program.terrains])
 
   def held_out(self, cfg) -> dict:
     """The task's held-out terrains of the kinds it draws, by name."""
