@@ -7,6 +7,8 @@ import json
 import os
 import pathlib
 
+from mjx_tracks import atomic
+
 
 def cache_dir() -> pathlib.Path:
   return pathlib.Path(os.environ.get("MJX_TRACKS_CACHE") or pathlib.Path.home() / ".cache" / "mjx_tracks" / "jax")
@@ -69,8 +71,6 @@ def record_compile_seconds(what: str, seconds: float) -> None:
     path = _times_path()
     times = json.loads(path.read_text()) if path.exists() else {}
     times[what] = round(max(seconds, float(times.get(what, 0.0))), 1)
-    tmp = path.with_suffix(f".{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(times, indent=1))
-    os.replace(tmp, path)
+    atomic.write_json(path, times)
   except (OSError, ValueError):
     pass

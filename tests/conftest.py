@@ -20,6 +20,13 @@ from mjx_tracks import compile_cache  # noqa: E402
 compile_cache.enable()
 
 
+def pytest_configure(config):
+  """A crashed xdist worker fails the session at once (--max-worker-restart 0 unless given): one
+  restarted after a crash once left the session hung until CI's time limit."""
+  if getattr(config.option, "maxworkerrestart", "absent") is None:
+    config.option.maxworkerrestart = 0
+
+
 @pytest.fixture(scope="session")
 def default_physics():
   from mjx_tracks.envs.config import default_config

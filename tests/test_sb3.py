@@ -1,7 +1,8 @@
 """`train.run --library sb3`: a tiny Stable-Baselines3 run on the CPU trains, is interrupted (a stop
 request as Ctrl-C makes one), resumes with its replay buffer and curriculum, exports a policy that
 acts as SB3's own deterministic policy, is evaluated, and shows in the dashboard's API; the export
-of each algorithm against SB3's predict; the presets in study specs."""
+of each algorithm against SB3's predict; the presets in study specs; PyTorch beside MuJoCo's EGL
+renderer without Triton."""
 
 import glob
 import json
@@ -15,6 +16,7 @@ import pytest
 
 from fastapi.testclient import TestClient
 
+import train.core.no_triton  # noqa: F401  (before any test imports PyTorch: train.core.no_triton says why)
 from train.core.policy import load_policy
 
 
@@ -164,3 +166,31 @@ def test_study_specs_take_the_library_and_its_presets():
                    ({"early_stop": "success"}, "has no early stop"), ({"hp": ["gamma=2"]}, "gamma")):
     with pytest.raises(ConfigError, match=key):
       study_from_dict({"name": "s", "tasks": ["asc-inc-cog"], "seeds": [0], "groups": [{**group, **bad}]})
+
+
+CRASH_SCRIPT = """
+import mujoco, mjx_tracks
+m = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom type='sphere' size='1'/></worldbody></mujoco>")
+renderer = mujoco.Renderer(m, 32, 32)  # an offscreen GL context (EGL where the machine has it)
+renderer.update_scene(mujoco.MjData(m))
+renderer.render()
+import train.core.sb3_env
+import torch
+torch.optim.Adam([torch.zeros(2, requires_grad=True)])  # PyTorch would import Triton here
+try:
+  import triton
+  print("triton loaded")
+except ImportError:
+  print("triton hidden")
+"""
+
+
+def test_pytorch_builds_an_optimizer_beside_an_egl_context_without_loading_triton():
+  """Where Triton is installed, loading it after an EGL context crashed the process (segmentation
+  fault: a lost pytest worker, then a hung session); train.core.no_triton hides it from PyTorch."""
+  import subprocess
+  import sys
+  out = subprocess.run([sys.executable, "-c", CRASH_SCRIPT], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "JAX_PLATFORMS": "cpu"})
+  assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
+  assert out.stdout.strip().endswith("triton hidden"), out.stdout

@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import json
 import os
 import sys
 
+from mjx_tracks import atomic
 from mjx_tracks.baselines import ALGO as BASELINE_ALGO, BASELINES, baseline
 from mjx_tracks.envs.config import ConfigError, TaskConfig, available_tasks, from_dict, load_config
 from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
@@ -200,8 +200,7 @@ def _write_report(args, meta: dict, scene: str, budget: int | None, policy_step,
     out = fewer_trials_path(out, args.trials)
     print(f"note: kept {report_path(args.run_dir, scene, budget)} ({fuller} trials) and its database rows; "
           f"this {args.trials}-trial result goes to {out} only", file=sys.stderr)
-  with open(out, "w") as f:
-    json.dump(report, f, indent=1)
+  atomic.write_json(out, report)
   if fuller is None or fuller <= args.trials:
     _record_trials(args, meta["run_id"], scene, budget, per_trial)
   return out

@@ -12,6 +12,7 @@ import dataclasses
 import functools
 import importlib.resources
 import itertools
+import math
 import pathlib
 import re
 import reprlib
@@ -140,7 +141,7 @@ class ControlConfig:
     from mjx_tracks.robots.spec import JOINT_GROUPS  # noqa: PLC0415
     for group, angle in self.start_pose:
       require(group in JOINT_GROUPS, f"{key}.start_pose", f"{group!r} is not a joint group; known: {sorted(JOINT_GROUPS)}")
-      require(abs(angle) <= 3.15, f"{key}.start_pose", f"{group}: {angle} rad is not an angle in [-pi, pi]")
+      require(abs(angle) <= math.pi, f"{key}.start_pose", f"{group}: {angle} rad is not an angle in [-pi, pi]")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -28,7 +28,7 @@ from mjx_tracks.sim.control import INCREMENT  # noqa: E402
 from mjx_tracks.sim.pose import chassis_rpy  # noqa: E402
 from mjx_tracks.tools.scripted import StairScript  # noqa: E402
 from scenes.spiral import landing_angle  # noqa: E402
-from train.evaluation import per_trial_figures, scene_config, suite_scenes, trial_runner  # noqa: E402
+from train.evaluation import scene_config, suite_scenes, trial_runner  # noqa: E402
 
 STEER_GAIN = 1.5  # rad/s of yaw rate per rad of heading error
 LANE_GAIN = 0.8  # rad of heading correction per m off the lane, at most LANE_MAX

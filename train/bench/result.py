@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import datetime
-import json
 import os
 import platform
 import sys
+
+from mjx_tracks import atomic
 
 
 class BenchInputError(ValueError):
@@ -28,7 +29,5 @@ def write_result(path: str, rows: list[dict], **fields) -> dict:
             "command": "python -m train.bench " + " ".join(sys.argv[1:]), "jax": jax.__version__,
             "host": platform.node(), **fields, "rows": rows}
   os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-  with open(path + ".tmp", "w") as f:
-    json.dump(result, f, indent=1)
-  os.replace(path + ".tmp", path)
+  atomic.write_json(path, result)
   return result

@@ -13,7 +13,6 @@ RUN/policy/ is the export: (normalizer, policy) plus policy.json, loadable by `t
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 from typing import Any, Callable
@@ -22,6 +21,7 @@ import jax
 import numpy as np
 import orbax.checkpoint as ocp
 from flax import serialization
+from mjx_tracks import atomic
 
 from train.core.networks import NetworkSpec
 
@@ -167,8 +167,5 @@ def export_policy(out_dir: str, normalizer, policy, spec: NetworkSpec, info: dic
   ckpt = ocp.StandardCheckpointer(multiprocessing_options=_solo())
   ckpt.save(os.path.join(path, "params"), _plain((normalizer, policy)), force=True)
   ckpt.wait_until_finished()
-  tmp = os.path.join(path, "policy.json.tmp")
-  with open(tmp, "w") as f:
-    json.dump({"network": spec.to_json(), **info}, f, indent=1)
-  os.replace(tmp, os.path.join(path, "policy.json"))
+  atomic.write_json(os.path.join(path, "policy.json"), {"network": spec.to_json(), **info})
   return path

@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 import os
 
+from mjx_tracks import atomic
+
 RUN_JSON = "run.json"
 REQUIRED = ("run_id", "task", "algo", "config")  # what every record holds
 
@@ -52,8 +54,4 @@ def run_config(run_dir: str):
 def write_run_record(run_dir: str, meta: dict) -> None:
   """RUN_DIR/run.json, atomically."""
   os.makedirs(run_dir, exist_ok=True)
-  path = run_json_path(run_dir)
-  tmp = path + ".tmp"
-  with open(tmp, "w") as f:
-    json.dump(meta, f, indent=1)
-  os.replace(tmp, path)
+  atomic.write_json(run_json_path(run_dir), meta)

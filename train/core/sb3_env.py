@@ -16,7 +16,9 @@ import time
 from typing import Any, Sequence
 
 import numpy as np
-from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+
+import train.core.no_triton  # noqa: F401  (before PyTorch loads)
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv  # noqa: E402
 
 from mjx_tracks.envs.gym_env import TrackedRobotVectorEnv
 from mjx_tracks.metrics import STEP_NAMES

@@ -25,6 +25,7 @@ from train.core.networks import NetworkSpec
 
 def _linears(module) -> list:
   """The torch Linear layers of a module, in order."""
+  import train.core.no_triton  # noqa: F401, PLC0415  (before PyTorch loads)
   import torch  # noqa: PLC0415
   return [m for m in module.modules() if isinstance(m, torch.nn.Linear)]
 

@@ -3,7 +3,6 @@ every launch goes to the launcher, which runs it on the Dask cluster."""
 
 from __future__ import annotations
 
-import json
 import os
 
 from fastapi import APIRouter, HTTPException, Request

@@ -14,6 +14,7 @@ import signal
 import sys
 import threading
 import time
+from mjx_tracks import atomic
 
 from train.db import ExperimentDB
 from train.core.plan import DEFAULT_LIBRARY
@@ -103,10 +104,7 @@ class StudyState:
     return StudyState(path, fresh)
 
   def save(self) -> None:
-    tmp = self.path + ".tmp"
-    with open(tmp, "w") as f:
-      json.dump({"cells": self.cells}, f, indent=1)
-    os.replace(tmp, self.path)
+    atomic.write_json(self.path, {"cells": self.cells})
 
   def counts(self) -> dict[str, int]:
     return status_counts(self.cells)

@@ -14,6 +14,8 @@ import sys
 import tarfile
 import tempfile
 
+from mjx_tracks import atomic
+
 # what a worker runs, after its own Python (sys.executable there: workers may be other machines)
 TRAIN = ("-m", "train.run")
 EVALUATE = ("-m", "train.evaluate")
@@ -52,10 +54,7 @@ def _call(argv: list[str], log_path: str, pid_path: str | None = None, phase: st
   with open(log_path, "a") as log:
     proc = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
     if pid_path:
-      tmp = f"{pid_path}.tmp"
-      with open(tmp, "w") as f:
-        json.dump({"pid": proc.pid, "host": socket.gethostname(), "phase": phase}, f)
-      os.replace(tmp, pid_path)
+      atomic.write_json(pid_path, {"pid": proc.pid, "host": socket.gethostname(), "phase": phase}, indent=None)
     try:
       return proc.wait()
     finally:
