@@ -103,9 +103,8 @@ def pick_kind(key: jax.Array, n: int, draw: Draw | None = None) -> jax.Array:
   return jnp.nonzero(draw.kinds, size=n)[0][i]
 
 
-def _finish(xi: jax.Array, r: Ranges, lo: jax.Array | None = None, hi: jax.Array | None = None) -> jax.Array:
-  lo = jnp.asarray(r.low, jnp.float32) if lo is None else lo
-  hi = jnp.asarray(r.high, jnp.float32) if hi is None else hi
+def _finish(xi: jax.Array, r: Ranges, lo: jax.Array, hi: jax.Array) -> jax.Array:
+  """xi clipped to [lo, hi], its integer components rounded."""
   xi = jnp.clip(xi, lo, hi)
   return jnp.where(jnp.asarray(r.integer), jnp.round(xi), xi)
 

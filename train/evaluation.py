@@ -128,17 +128,16 @@ def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=la
   return core, rollout
 
 
-def scene_programs(cfg0: TaskConfig, scenes: list[str], config=None) -> list[tuple[TaskConfig, dict]]:
+def scene_programs(cfg0: TaskConfig, scenes: list[str]) -> list[tuple[TaskConfig, dict]]:
   """[(the config of one compiled program, {scene: its draw})] evaluating task cfg0's scenes:
-  scenes whose configs (config(cfg0, scene), default scene_config) differ only in the keys their
-  kind takes as data (SceneKind.drawn: a stair task's sampler and ranges) share one program and
-  pass their draw; any other scene gets a program of its own (draw None)."""
+  scenes whose configs (scene_config) differ only in the keys their kind takes as data
+  (SceneKind.drawn: sampler, ranges, the sub-kinds drawn) share one program and pass their draw;
+  any other scene (a navigation area of another world) gets a program of its own."""
   import dataclasses  # noqa: PLC0415
-  config = scene_config if config is None else config
   kind = scene_kind(cfg0.scene.kind)
   groups: list[tuple[TaskConfig, list[tuple[str, TaskConfig]]]] = []
   for scene in scenes:
-    cfg = config(cfg0, scene)
+    cfg = scene_config(cfg0, scene)
     key = replace_scene(cfg, **{k: getattr(cfg0.scene, k) for k in kind.drawn})
     members = next((m for k, m in groups if k == key), None)
     if members is None:
