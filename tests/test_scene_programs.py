@@ -105,3 +105,20 @@ def test_terrain_and_navigation_scenes_share_a_program_where_only_their_draw_dif
   if len(names) > 1:  # both samplers and the kinds mask were exercised: the draws differ by scene
     assert len({tuple(np.asarray(d.kinds)) for d in draws.values()}) > 1
 
+
+
+def test_a_kinds_mask_draws_uniformly_among_the_kinds_it_allows():
+  """pick_kind: with kinds [T, F, T, T] each allowed kind has probability 1/3 (20,000 draws: within
+  5 standard deviations of the binomial), the other never; with every kind allowed, the index
+  drawn without a mask."""
+  keys = jax.random.split(jax.random.PRNGKey(7), 20_000)
+  r = stair_ranges((0.3, 0.5), (0.1, 0.2), (2, 6))
+  mask = samplers.as_draw(r, "uniform", [True, False, True, True])
+  picks = np.asarray(jax.vmap(lambda k: samplers.pick_kind(k, 4, mask))(keys))
+  counts = np.bincount(picks, minlength=4)
+  n, p = len(keys), 1 / 3
+  assert counts[1] == 0
+  assert np.all(np.abs(counts[[0, 2, 3]] - n * p) < 5 * np.sqrt(n * p * (1 - p))), counts
+  every = samplers.as_draw(r, "uniform", [True] * 4)
+  np.testing.assert_array_equal(jax.vmap(lambda k: samplers.pick_kind(k, 4, every))(keys[:500]),
+                                jax.vmap(lambda k: samplers.pick_kind(k, 4))(keys[:500]))
