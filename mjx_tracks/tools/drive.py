@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import sys
 import time
 
@@ -16,6 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from mjx_tracks import atomic
 from mjx_tracks.envs.config import default_config
 from mjx_tracks.envs.rewards import goal_distance, goal_reached
 from mjx_tracks.robots import get_robot
@@ -175,8 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     qpos = keyboard_rollout(setup, n_steps)
   summary = summarize(setup, qpos)
   if args.out:
-    with open(args.out, "w") as f:
-      json.dump(trajectory_record(setup, qpos, summary), f)
+    atomic.write_json(args.out, trajectory_record(setup, qpos, summary), indent=None)
   if args.video:
     from mjx_tracks.tools.render import render_frames, write_video  # noqa: PLC0415
     mj = setup.sim.c_model_with_boxes(*sc.step_boxes(setup.stairs))

@@ -21,8 +21,8 @@ import jax
 import numpy as np
 import orbax.checkpoint as ocp
 from flax import serialization
-from mjx_tracks import atomic
 
+from mjx_tracks import atomic
 from train.core.networks import NetworkSpec
 
 KEEP = 3  # checkpoints kept

@@ -14,8 +14,8 @@ import signal
 import sys
 import threading
 import time
-from mjx_tracks import atomic
 
+from mjx_tracks import atomic
 from train.db import ExperimentDB
 from train.core.plan import DEFAULT_LIBRARY
 from train.core.run_record import read_run_record, run_id_in
