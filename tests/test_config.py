@@ -188,3 +188,20 @@ def test_declared_ranges_are_what_validation_checks_and_what_the_form_shows():
         bad = int(bad) if f["kind"] == "int" else bad
         with pytest.raises(ConfigError, match=re.escape(key)):
           load_config("asc-inc-cog", [f"{key}={bad}"])
+
+
+@pytest.mark.parametrize("depth", [200, 5_000])
+def test_deeply_nested_yaml_is_refused_in_one_line_whichever_layer_stops_it(depth):
+  """PyYAML >= 6.0.4 refuses deep nesting itself; older ones recurse until Python's limit: the
+  message is the same either way (and a study posted to the server says it too)."""
+  from mjx_tracks.envs.config import NESTED_TOO_DEEPLY, load_yaml
+  text = "a: " + "[" * depth + "]" * depth
+  if depth == 200:  # shallow enough for every parser: read as nested lists
+    value = load_yaml(text, "x.yaml")["a"]
+    for _ in range(depth - 1):
+      (value,) = value
+    assert value == []
+    return
+  with pytest.raises(ConfigError) as e:
+    load_yaml(text, "x.yaml", "study")
+  assert str(e.value) == f"x.yaml: {NESTED_TOO_DEEPLY}" and e.value.key == "study"

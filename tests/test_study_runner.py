@@ -185,6 +185,15 @@ if __name__ == "__main__":
 """
 
 
+def _cmdline(p) -> list[str]:
+  """A process's command line; [] for one that ended (or is a zombie) since it was listed."""
+  import psutil
+  try:
+    return p.cmdline()
+  except psutil.Error:  # NoSuchProcess, ZombieProcess (a child exiting while the runner starts its runs)
+    return []
+
+
 def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_nothing_behind(tmp_path):
   """A scheduler's SIGTERM reaches the study process alone: it forwards it to the runs it started,
   which save; their folders come back; no run process nor scratch folder is left; exit 143."""
@@ -200,7 +209,7 @@ def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_not
   t_end, runs = time.time() + 120, []
   while not runs:
     assert time.time() < t_end and proc.poll() is None, proc.stdout.read() if proc.poll() is not None else ""
-    runs = [p for p in psutil.Process(proc.pid).children(recursive=True) if FAKE in " ".join(p.cmdline())]
+    runs = [p for p in psutil.Process(proc.pid).children(recursive=True) if FAKE in " ".join(_cmdline(p))]
     time.sleep(0.2)
   while not list(scratch.glob("study-cell-*/**/checkpoints/*")):  # a checkpoint (the run has started up)
     assert time.time() < t_end and proc.poll() is None, "no checkpoint in time"

@@ -88,6 +88,7 @@ def _expanded_nodes(node, memo: dict) -> int:
 
 
 SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's, where PyYAML has it: ~10x faster
+NESTED_TOO_DEEPLY = "YAML nested too deeply"  # the one message, whichever layer refuses the depth
 
 
 def load_yaml(text: str, source: str, key: str | None = None):
@@ -108,14 +109,16 @@ def load_yaml(text: str, source: str, key: str | None = None):
   except ConfigError:
     raise
   except yaml.YAMLError as e:
+    why = str(getattr(e, "problem", None) or e).splitlines()[0]
+    if "nesting depth" in why:  # PyYAML >= 6.0.4 limits the depth itself (older ones: RecursionError below)
+      raise ConfigError(f"{source}: {NESTED_TOO_DEEPLY}", key) from None
     where = f" (line {e.problem_mark.line + 1}, column {e.problem_mark.column + 1})" \
         if getattr(e, "problem_mark", None) else ""
-    why = str(getattr(e, "problem", None) or e).splitlines()[0]
     raise ConfigError(f"{source}: not valid YAML{where}: {why}", key) from None
   except ValueError as e:
     raise ConfigError(f"{source}: {e}", key) from None
   except RecursionError:
-    raise ConfigError(f"{source}: YAML nested too deeply", key) from None
+    raise ConfigError(f"{source}: {NESTED_TOO_DEEPLY}", key) from None
   finally:
     if loader is not None:
       loader.dispose()
