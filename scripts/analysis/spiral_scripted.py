@@ -5,6 +5,7 @@ evaluation suites; success and tip-overs by the tasks' own rules. Prints a table
 with the device, command and date; --gif DIR adds a GIF of trial 0 per task, lane and scene.
 
 python scripts/analysis/spiral_scripted.py --out results/terrain/spiral-scripted.json [--trials 8]
+    [--tasks spiral-up-hard,spiral-down-hard] [--scenes hardest] [--lanes 0,0.5]
 """
 
 from __future__ import annotations
@@ -93,14 +94,17 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("--out", required=True)
   p.add_argument("--trials", type=int, default=8)
   p.add_argument("--gif", help="a folder for GIFs of trial 0")
+  p.add_argument("--tasks", default="spiral-up,spiral-down", help="spiral tasks, comma-separated")
+  p.add_argument("--scenes", help="evaluation scenes, comma-separated (default: each task's suite)")
+  p.add_argument("--lanes", default=",".join(map(str, LANES)), help="m from the centre line, comma-separated")
   args = p.parse_args(argv)
   compile_cache.enable()
   if args.gif:
     os.makedirs(args.gif, exist_ok=True)
   rows = []
-  for task in ("spiral-up", "spiral-down"):
-    for scene in suite_scenes(load_config(task)):
-      for lane in LANES:
+  for task in args.tasks.split(","):
+    for scene in args.scenes.split(",") if args.scenes else suite_scenes(load_config(task)):
+      for lane in map(float, args.lanes.split(",")):
         rows.append(run(task, scene, lane, args.trials, args.gif))
         print(json.dumps(rows[-1]), flush=True)
   out = {"device": str(jax.devices()[0]), "machine": platform.machine(), "argv": sys.argv,
