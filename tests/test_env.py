@@ -31,8 +31,9 @@ TERRAIN_SEED = 4
 RUN_TASKS = ("asc-inc-cog", "des-hard", "nav", "mixed-terrain", "asc-inc-cog-r2", "spiral-up")
 EXERCISED_KEYS = {"task", "scene.sampler", "reward.kind", "scene.direction", "scene.terrains", "episode.max_steps",
                   "reward.safety_form", "reward.angular_scale", "reward.goal_bonus", "scene.tread", "scene.riser",
-                  "observation.noise", "evaluation.held_out_terrain"}  # hidden rays: tests/test_randomization.py
-#                     compiles every randomization path; the held-out terrains are evaluation scenes (data)
+                  "observation.noise", "evaluation.held_out_terrain", "evaluation.held_out_nav",
+                  "scene.nav_gap"}  # hidden rays: tests/test_randomization.py compiles every randomization path;
+#                     held-out terrains and areas are evaluation scenes; a gap range is a constant of nav's code
 DATA_PREFIXES = ("scene.terrain.",)  # a terrain kind's ranges: the sampler's data (its box pool is scenes.terrain.POOL)
 SIZE_KEYS = {"scene.steps", "scene.nav_floor_obstacles", "randomization.enabled"}  # traced here: shapes or state change
 

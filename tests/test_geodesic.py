@@ -48,6 +48,17 @@ def test_a_closed_area_has_no_path_and_the_robot_touching_a_wall_still_has_one()
   assert g([4.5, 3.2], [8.0, 0.0]) == pytest.approx(math.hypot(0.9, 0.2) + math.hypot(2.6, 3.4), abs=TOL)
 
 
+def test_the_distance_falls_fastest_along_the_path_so_its_gradient_steers():
+  """-grad G is the unit vector toward the goal in the open and toward the inflated corner the path
+  runs over behind the wall (scripts/analysis/nav_scripted.py steers by it)."""
+  grad = lambda p, goal: np.asarray(jax.grad(lambda q: geodesic_distance(  # noqa: E731
+      q, jnp.array(goal), WALL_LO, WALL_HI, *AREA, R))(jnp.array(p)))
+  np.testing.assert_allclose(-grad([1.0, 4.0], [8.0, 4.0]), [1.0, 0.0], atol=1e-5)
+  corner = np.array([4.0 - R, 3.0 + R])  # the path (1, 0) -> (3.6, 3.4) -> ...
+  want = (corner - [1.0, 0.0]) / np.linalg.norm(corner - [1.0, 0.0])
+  np.testing.assert_allclose(-grad([1.0, 0.0], [8.0, 0.0]), want, atol=1e-3)
+
+
 def test_the_slab_test_lets_segments_graze_a_box_but_not_cross_it():
   lo, hi = jnp.array([[0.0, 0.0]]), jnp.array([[1.0, 1.0]])
   assert not segment_blocked(jnp.array([-1.0, 1.0]), jnp.array([2.0, 1.0]), lo, hi)  # along the top edge
