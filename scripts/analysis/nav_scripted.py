@@ -70,15 +70,17 @@ def make_act(core: TrackedRobotEnv, speed: float, floor_clearance: float | None)
   return lambda _params: jax.vmap(one)
 
 
-def run(task: str, scene: str, speed: float, trials: int, overrides: list[str], floor_clearance: float | None) -> dict:
+def run(task: str, scene: str, speed: float, trials: int, overrides: list[str],
+        floor_clearance: float | None) -> dict:
   """One scene of one task (with config overrides): the trials' mean figures."""
   task_cfg = load_config(task, overrides)
   core = TrackedRobotEnv(scene_config(task_cfg, scene))
-  runner = trial_runner(task_cfg, [scene], make_act(core, speed, floor_clearance), trials, EVAL_EPS, EVAL_SEED, observe=lambda s: s)
-  figs, _, _ = runner(None, scene)
-  return {"task": task, "overrides": overrides, "scene": scene, "speed_m_s": speed, "floor_clearance_m": floor_clearance,
-          "trials": trials,
-          **{k: round(float(np.mean(figs[k])), 3) for k in ("success", "progress", "collided", "tipped_over", "length")}}
+  act = make_act(core, speed, floor_clearance)
+  figs, _, _ = trial_runner(task_cfg, [scene], act, trials, EVAL_EPS, EVAL_SEED, observe=lambda s: s)(None, scene)
+  mean = lambda k: round(float(np.mean(figs[k])), 3)  # noqa: E731
+  return {"task": task, "overrides": overrides, "scene": scene, "speed_m_s": speed,
+          "floor_clearance_m": floor_clearance, "trials": trials,
+          **{k: mean(k) for k in ("success", "progress", "collided", "tipped_over", "length")}}
 
 
 def main(argv: list[str] | None = None) -> int:
