@@ -205,3 +205,25 @@ def test_deeply_nested_yaml_is_refused_in_one_line_whichever_layer_stops_it(dept
   with pytest.raises(ConfigError) as e:
     load_yaml(text, "x.yaml", "study")
   assert str(e.value) == f"x.yaml: {NESTED_TOO_DEEPLY}" and e.value.key == "study"
+
+
+def test_a_parser_that_limits_the_depth_itself_gets_the_same_message(monkeypatch):
+  """PyYAML >= 6.0.4's own refusal ("exceeded maximum nesting depth"), whichever PyYAML is installed."""
+  import yaml
+
+  from mjx_tracks.envs import config
+
+  class Refusing:
+    def __init__(self, text):
+      pass
+
+    def get_single_node(self):
+      raise yaml.MarkedYAMLError(problem="exceeded maximum nesting depth")
+
+    def dispose(self):
+      pass
+
+  monkeypatch.setattr(config, "SAFE_LOADER", Refusing)
+  with pytest.raises(ConfigError) as e:
+    config.load_yaml("a: 1", "x.yaml")
+  assert str(e.value) == f"x.yaml: {config.NESTED_TOO_DEEPLY}"

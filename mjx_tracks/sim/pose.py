@@ -6,6 +6,11 @@ import jax
 import jax.numpy as jnp
 
 
+def wrap_angle(a: jax.Array) -> jax.Array:
+  """An angle (rad) mapped onto [-pi, pi)."""
+  return (a + jnp.pi) % (2 * jnp.pi) - jnp.pi
+
+
 def quat_to_rpy(q: jax.Array) -> jax.Array:
   """(w, x, y, z) quaternion -> (roll, pitch, yaw) rad, ZYX convention (pitch > 0: nose down)."""
   w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]

@@ -6,7 +6,7 @@ success was slow; one that stays a failure is stuck (or tips over). Prints a tab
 with the device, command and date.
 
 python scripts/analysis/longer_episodes.py RUN [--scene hardest] [--case friction-low] \
-    [--max-steps 50,100,200] [--trials 100] --out FILE
+    [--factors 1,2,4] [--trials 100] --out FILE
 """
 
 from __future__ import annotations
@@ -28,12 +28,11 @@ from train.core.run_record import run_config  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, perturbed, trial_runner  # noqa: E402
 
 
-def figures(run_dir: str, scene: str, case: str, max_steps: int, trials: int) -> dict:
-  """Mean figures of `trials` trials of the run's policy on `scene` under `case`, episodes of at
-  most max_steps control steps, and each trial's success (for pairing across limits)."""
-  cfg = run_config(run_dir)
-  cfg = perturbed(from_dict(apply_override(cfg.to_dict(), f"episode.max_steps={max_steps}")), case)
-  spec, params = load_policy_params(os.path.join(run_dir, "policy"))
+def figures(task_cfg, policy, scene: str, case: str, max_steps: int, trials: int) -> dict:
+  """Mean figures of `trials` trials of the policy (spec, params) on `scene` of task_cfg under
+  `case`, episodes of at most max_steps control steps, and each trial's success (for pairing)."""
+  cfg = perturbed(from_dict(apply_override(task_cfg.to_dict(), f"episode.max_steps={max_steps}")), case)
+  spec, params = policy
   per_trial, _, _ = trial_runner(cfg, [scene], act_from_params(spec), trials, EVAL_EPS, EVAL_SEED)(params, scene)
   mean = lambda k: round(float(np.mean(per_trial[k])), 3)  # noqa: E731
   return {"max_steps": max_steps, "seconds": max_steps * cfg.control.period, "success": mean("success"),
@@ -46,14 +45,18 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("run_dir")
   p.add_argument("--scene", default="hardest")
   p.add_argument("--case", default="friction-low", help="a case of the run's evaluation.robustness")
-  p.add_argument("--max-steps", default="50,100,200", help="episode step limits, comma-separated")
+  p.add_argument("--factors", default="1,2,4", help="episode step limits as multiples of the task's, comma-separated "
+                 "(the first is the reference the others are paired with)")
   p.add_argument("--trials", type=int, default=100)
   p.add_argument("--out", required=True)
   args = p.parse_args(argv)
   compile_cache.enable()
+  task_cfg = run_config(args.run_dir)
+  policy = load_policy_params(os.path.join(args.run_dir, "policy"))
   rows = []
-  for n in map(int, args.max_steps.split(",")):
-    rows.append(figures(args.run_dir, args.scene, args.case, n, args.trials))
+  for factor in map(float, args.factors.split(",")):
+    n = int(round(factor * task_cfg.episode.max_steps))
+    rows.append(figures(task_cfg, policy, args.scene, args.case, n, args.trials))
     print({k: v for k, v in rows[-1].items() if k != "per_trial_success"}, flush=True)
   first = np.asarray(rows[0]["per_trial_success"], bool)
   for r in rows[1:]:  # paired: the same trials at a longer limit

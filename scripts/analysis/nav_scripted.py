@@ -7,7 +7,7 @@ and collisions by the tasks' own rules. Prints a table and writes JSON with the 
 date.
 
 python scripts/analysis/nav_scripted.py --tasks nav-hard --out results/hard_tier/nav-scripted-cpu.json \
-    [--scenes nav/hallway,nav/zigzag] [--trials 100] [--speed 0.5] [--floor-clearance 0.45] [--set KEY=VALUE ...]
+    [--scenes nav/hallway,nav/zigzag] [--trials 100] [--speed 0.5] [--floor-clearance 0.44] [--set KEY=VALUE ...]
 """
 
 from __future__ import annotations
@@ -27,28 +27,26 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspa
 from mjx_tracks import atomic, compile_cache  # noqa: E402
 from mjx_tracks.envs.config import load_config  # noqa: E402
 from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: E402
-from mjx_tracks.sim.pose import chassis_rpy  # noqa: E402
+from mjx_tracks.sim.pose import chassis_rpy, wrap_angle  # noqa: E402
 from scenes.geodesic import geodesic_distance  # noqa: E402
-from scenes.navigation import AREA_HI, AREA_LO, WALL_OBSTACLES  # noqa: E402
+from scenes.navigation import AREA_HI, AREA_LO, GAP_MARGIN, WALL_OBSTACLES  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_config, suite_scenes, trial_runner  # noqa: E402
 
 STEER_GAIN = 2.0  # rad/s of yaw rate per rad of heading error
 TURN_ON_SPOT = 0.6  # rad: a heading error beyond this stops the drive and turns in place
 
 
-def _wrap(a):
-  return (a + jnp.pi) % (2 * jnp.pi) - jnp.pi
-
-
 def path_length(core: TrackedRobotEnv, es, floor_clearance: float | None):
   """G(xy) (m): the task's free-space distance (around the wall obstacles), or with floor_clearance
-  (m) the shortest path around the floor obstacles too, keeping that clearance from every box."""
+  (m) the shortest path around the floor obstacles too, keeping that clearance from every box,
+  capped as the task caps its own (NavScene.free_space_distance) so that the area's gap stays open."""
   if floor_clearance is None:
     return lambda xy: core.scene.free_space_distance(es.scene, xy)
   n = WALL_OBSTACLES + core.scene.floor_obstacles
   pos, size = es.scene.box_pos[:n, :2], es.scene.box_size[:n, :2]
+  clearance = jnp.minimum(floor_clearance, es.scene.xi[4] / 2 - GAP_MARGIN)  # xi[4]: the area's gap C (m)
   return lambda xy: geodesic_distance(xy, es.scene.goal[:2], pos - size, pos + size, jnp.array(AREA_LO),
-                                      jnp.array(AREA_HI), floor_clearance)
+                                      jnp.array(AREA_HI), clearance)
 
 
 def make_act(core: TrackedRobotEnv, speed: float, floor_clearance: float | None):
@@ -62,7 +60,7 @@ def make_act(core: TrackedRobotEnv, speed: float, floor_clearance: float | None)
     grad = jax.grad(path_length(core, es, floor_clearance))(pos[:2])
     to_goal = es.scene.goal[:2] - pos[:2]
     down = jnp.where(jnp.all(jnp.isfinite(grad)) & (jnp.linalg.norm(grad) > 1e-6), -grad, to_goal)
-    error = _wrap(jnp.arctan2(down[1], down[0]) - chassis_rpy(es.data.qpos)[2])
+    error = wrap_angle(jnp.arctan2(down[1], down[0]) - chassis_rpy(es.data.qpos)[2])
     v = jnp.where(jnp.abs(error) > TURN_ON_SPOT, 0.0, speed)
     w = jnp.clip(STEER_GAIN * error, -c.max_yaw_rate, c.max_yaw_rate)
     return c.encode(v, w, es.targets, es.targets)

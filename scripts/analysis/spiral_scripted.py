@@ -26,7 +26,7 @@ from mjx_tracks import compile_cache  # noqa: E402
 from mjx_tracks.envs.config import load_config  # noqa: E402
 from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: E402
 from mjx_tracks.sim.control import INCREMENT  # noqa: E402
-from mjx_tracks.sim.pose import chassis_rpy  # noqa: E402
+from mjx_tracks.sim.pose import chassis_rpy, wrap_angle  # noqa: E402
 from mjx_tracks.tools.scripted import StairScript  # noqa: E402
 from scenes.spiral import landing_angle  # noqa: E402
 from train.evaluation import scene_config, suite_scenes, trial_runner  # noqa: E402
@@ -35,10 +35,6 @@ STEER_GAIN = 1.5  # rad/s of yaw rate per rad of heading error
 LANE_GAIN = 0.8  # rad of heading correction per m off the lane, at most LANE_MAX
 LANE_MAX = 0.6  # rad
 LANES = (0.0, 0.5)  # m from the centre line (+: outward, where the treads are longer)
-
-
-def _wrap(a):
-  return (a + jnp.pi) % (2 * jnp.pi) - jnp.pi
 
 
 def desired_heading(xy, xi, goal, up: bool, lane: float):
@@ -65,7 +61,7 @@ def make_act(core: TrackedRobotEnv, up: bool, lane: float):
     rpy = chassis_rpy(es.data.qpos)
     speed, targets = script.command(robot, -rpy[1])
     heading = desired_heading(es.data.qpos[:2], es.scene.xi, es.scene.goal, up, lane)
-    w = jnp.clip(STEER_GAIN * _wrap(heading - rpy[2]) / c.max_yaw_rate, -1.0, 1.0)
+    w = jnp.clip(STEER_GAIN * wrap_angle(heading - rpy[2]) / c.max_yaw_rate, -1.0, 1.0)
     joint = lambda i: jnp.clip((targets[i] - es.targets[i]) / INCREMENT, -1.0, 1.0)  # noqa: E731
     return jnp.stack([2.0 * (speed - lo) / (hi - lo) - 1.0, w, joint(front), joint(rear)])
 
