@@ -141,11 +141,15 @@ class NavScene:
     boxes = [f"{SCENE_BOX}{k}" for k in range(WALL_OBSTACLES + self.floor_obstacles)]
     return WALLS + tuple(boxes[:WALL_OBSTACLES]), tuple(boxes[WALL_OBSTACLES:])
 
-  def free_space_distance(self, scene: SceneState, pos: jax.Array) -> jax.Array:
+  def free_space_distance(self, scene: SceneState, pos: jax.Array, boxes: int = WALL_OBSTACLES,
+                          clearance: float | None = None) -> jax.Array:
     """Length (m) of the shortest path from pos (x, y, ...) to the goal around the wall obstacles
-    (module docstring)."""
-    pos_b, size_b = scene.box_pos[:WALL_OBSTACLES, :2], scene.box_size[:WALL_OBSTACLES, :2]
-    clearance = jnp.minimum(self.clearance, scene.xi[4] / 2 - GAP_MARGIN)  # xi[4]: this area's gap C
+    (module docstring); around the first `boxes` scene boxes (WALL_OBSTACLES + floor_obstacles: the
+    floor obstacles too) and keeping `clearance` (m, default scene.nav_clearance) where given, the
+    clearance capped alike."""
+    pos_b, size_b = scene.box_pos[:boxes, :2], scene.box_size[:boxes, :2]
+    wanted = self.clearance if clearance is None else clearance
+    clearance = jnp.minimum(wanted, scene.xi[4] / 2 - GAP_MARGIN)  # xi[4]: this area's gap C
     return geodesic_distance(pos[:2], scene.goal[:2], pos_b - size_b, pos_b + size_b,
                              jnp.array(AREA_LO), jnp.array(AREA_HI), clearance)
 

@@ -25,17 +25,19 @@ from mjx_tracks import atomic, compile_cache  # noqa: E402
 from mjx_tracks.envs.config import apply_override, from_dict  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from train.core.run_record import run_config  # noqa: E402
-from train.evaluation import EVAL_EPS, EVAL_SEED, perturbed, trial_runner  # noqa: E402
+from train.evaluation import EVAL_EPS, EVAL_SEED, ROBUST, trial_runner  # noqa: E402
 
 
 def figures(task_cfg, policy, scene: str, case: str, max_steps: int, trials: int) -> dict:
   """Mean figures of `trials` trials of the policy (spec, params) on `scene` of task_cfg under
   `case`, episodes of at most max_steps control steps, and each trial's success (for pairing)."""
-  cfg = perturbed(from_dict(apply_override(task_cfg.to_dict(), f"episode.max_steps={max_steps}")), case)
+  cfg = from_dict(apply_override(task_cfg.to_dict(), f"episode.max_steps={max_steps}"))
   spec, params = policy
-  per_trial, _, _ = trial_runner(cfg, [scene], act_from_params(spec), trials, EVAL_EPS, EVAL_SEED)(params, scene)
+  case_scene = f"{scene}{ROBUST}{case}"  # the evaluation scene BASE+CASE (train.evaluation.scene_config)
+  run = trial_runner(cfg, [case_scene], act_from_params(spec), trials, EVAL_EPS, EVAL_SEED)
+  per_trial, _, _ = run(params, case_scene)
   mean = lambda k: round(float(np.mean(per_trial[k])), 3)  # noqa: E731
-  return {"max_steps": max_steps, "seconds": max_steps * cfg.control.period, "success": mean("success"),
+  return {"max_steps": max_steps, "seconds": max_steps * task_cfg.control.period, "success": mean("success"),
           "progress": mean("progress"), "tipped_over": mean("tipped_over"), "length": mean("length"),
           "per_trial_success": [int(x) for x in np.asarray(per_trial["success"]) > 0.5]}
 

@@ -28,8 +28,7 @@ from mjx_tracks import atomic, compile_cache  # noqa: E402
 from mjx_tracks.envs.config import load_config  # noqa: E402
 from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: E402
 from mjx_tracks.sim.pose import chassis_rpy, wrap_angle  # noqa: E402
-from scenes.geodesic import geodesic_distance  # noqa: E402
-from scenes.navigation import AREA_HI, AREA_LO, GAP_MARGIN, WALL_OBSTACLES  # noqa: E402
+from scenes.navigation import WALL_OBSTACLES  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_config, suite_scenes, trial_runner  # noqa: E402
 
 STEER_GAIN = 2.0  # rad/s of yaw rate per rad of heading error
@@ -38,15 +37,12 @@ TURN_ON_SPOT = 0.6  # rad: a heading error beyond this stops the drive and turns
 
 def path_length(core: TrackedRobotEnv, es, floor_clearance: float | None):
   """G(xy) (m): the task's free-space distance (around the wall obstacles), or with floor_clearance
-  (m) the shortest path around the floor obstacles too, keeping that clearance from every box,
-  capped as the task caps its own (NavScene.free_space_distance) so that the area's gap stays open."""
+  (m) the shortest path around the floor obstacles too, keeping that clearance from every box
+  (NavScene.free_space_distance caps it as it caps its own, so that the area's gap stays open)."""
   if floor_clearance is None:
     return lambda xy: core.scene.free_space_distance(es.scene, xy)
-  n = WALL_OBSTACLES + core.scene.floor_obstacles
-  pos, size = es.scene.box_pos[:n, :2], es.scene.box_size[:n, :2]
-  clearance = jnp.minimum(floor_clearance, es.scene.xi[4] / 2 - GAP_MARGIN)  # xi[4]: the area's gap C (m)
-  return lambda xy: geodesic_distance(xy, es.scene.goal[:2], pos - size, pos + size, jnp.array(AREA_LO),
-                                      jnp.array(AREA_HI), clearance)
+  boxes = WALL_OBSTACLES + core.scene.floor_obstacles
+  return lambda xy: core.scene.free_space_distance(es.scene, xy, boxes, floor_clearance)
 
 
 def make_act(core: TrackedRobotEnv, speed: float, floor_clearance: float | None):
