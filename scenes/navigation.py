@@ -10,9 +10,12 @@ gap C ~ U(C_min, C_max) (scene.nav_gap; the original's U(1, 2) m, 1 + U(0, 1)):
            obstacle 2 from the right wall at x = 2 + 2L/3, each W_i ~ U(W/2 - C/2, W - C)
            long, so the robot must weave; L_i is their thickness (0.3 m).
 Components are drawn as u in [0, 1]^5 by the scene's sampler (uniform or incremental over unit
-ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or random x ~ U(0.75, 1.5),
-y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2) (x from 0.75 m: robot 1's footprint reaches 0.64 m from its
-centre, and from x = 0.5 m one spawn in 17 started inside the back wall). Goal: fixed (11, 0), or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
+ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or random x ~ U(0.8, 1.2),
+y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2): every spawn is >= 0.8 m from the walls and the obstacle area
+(x >= 2 m), so a robot that cannot reverse can always turn in place (the circle robot 1 sweeps:
+0.62 m at rest, 0.75 m with its arm stretched flat ahead; x ~ U(0.75, 1.5) until 2026-11-25 put
+3 % of the hallway spawns within 0.75 m of an obstacle, some facing into it). Goal: fixed (11, 0),
+or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
 Floor obstacles (`floor_obstacles` of them): low boxes to drive over or around, each
 centred at x ~ U(2.5, 9.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
 height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays.
@@ -49,7 +52,8 @@ WALL_OBSTACLES = 2  # the first scene boxes: the hallway's or zigzag's obstacles
 WALLS = ("wall_left", "wall_right", "wall_back", "wall_front")  # the area's wall planes (geom names)
 NAV_CLEARANCE_LIMITS = (0.3, 1.0)  # m, what scene.nav_clearance may ask (robot 1: half-width 0.39, half-diagonal 0.75)
 GAP_MARGIN = 0.02  # m, a path through a gap C keeps at most C / 2 - GAP_MARGIN from its sides
-SPAWN_X = (0.75, 1.5)  # m, random spawns' x range
+SPAWN_X = (0.8, 1.2)  # m, random spawns' x range (module docstring: room to turn in place)
+SPAWN_Y = (-4.0, 4.0)  # m, random spawns' y range
 AREA_LO, AREA_HI = (0.0, -AREA_W / 2), (AREA_LEN, AREA_W / 2)  # m, the area's corners (x, y)
 NAV_AREAS = ("hallway", "zigzag")  # the area kinds (scene.nav_kinds)
 UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
@@ -124,7 +128,7 @@ class NavScene:
                     jnp.where(zig, WALL_THICKNESS, l2), c])
     s = jax.random.uniform(k_s, (3,))
     if self.random_spawn:
-      spawn, yaw = jnp.array([_lerp(*SPAWN_X, s[0]), _lerp(-4.0, 4.0, s[1]), 0.0]), _lerp(-jnp.pi / 2, jnp.pi / 2, s[2])
+      spawn, yaw = jnp.array([_lerp(*SPAWN_X, s[0]), _lerp(*SPAWN_Y, s[1]), 0.0]), _lerp(-jnp.pi / 2, jnp.pi / 2, s[2])
     else:
       spawn, yaw = jnp.array([1.0, 0.0, 0.0]), jnp.float32(0.0)
     g = jax.random.uniform(k_g, (2,))

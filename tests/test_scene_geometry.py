@@ -179,3 +179,39 @@ def test_a_long_staircase_task_sizes_its_box_pool_and_places_every_step():
     assert (np.asarray(s.box_pos[n:, 2]) < -5).all()
     np.testing.assert_allclose(np.asarray(rays[:n]), 5.0 - (np.arange(n) + 1) * h, atol=1e-4)
   assert 10 <= min(lengths) and max(lengths) <= 15 and len(lengths) > 1
+
+
+def _turning_radius(sim) -> float:
+  """The largest horizontal distance (m) of any robot geom's bounding-box corner from the chassis,
+  robot 1 at rest in MuJoCo's C model (joints at 0): the circle its footprint sweeps turning in place."""
+  c = sim.mj_model
+  d = mujoco.MjData(c)
+  mujoco.mj_forward(c, d)
+  centre = d.xpos[sim.layout.chassis_body][:2]
+  corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+  reach = 0.0
+  for g in range(c.ngeom):
+    if c.geom_bodyid[g] == 0:  # the world's geoms
+      continue
+    local = c.geom_aabb[g, :3] + corners * c.geom_aabb[g, 3:]
+    world = d.geom_xpos[g] + local @ d.geom_xmat[g].reshape(3, 3).T
+    reach = max(reach, np.linalg.norm(world[:, :2] - centre, axis=1).max())
+  return reach
+
+
+@pytest.mark.parametrize("gap", [(0.85, 0.85), (1.0, 2.0), (3.0, 3.0)])
+def test_every_nav_spawn_leaves_room_to_turn_in_place(gap):
+  """A robot that cannot reverse must be able to turn where it starts: the circle its footprint
+  sweeps clears the area's walls and both wall obstacles at every random spawn, in either area."""
+  env = mjx_tracks.load("nav", [f"scene.nav_gap=[{gap[0]}, {gap[1]}]"])
+  radius = _turning_radius(env.sim)
+  assert 0.55 < radius < 0.75  # robot 1 at rest: 0.62 m (its arm stretched flat ahead: 0.75 m)
+  s = jax.jit(jax.vmap(env.scene.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(7), 20000), 1.0)
+  p = np.asarray(s.spawn_pos[:, None, :2])
+  lo = np.asarray(s.box_pos[:, :2, :2] - s.box_size[:, :2, :2])
+  hi = np.asarray(s.box_pos[:, :2, :2] + s.box_size[:, :2, :2])
+  to_box = np.linalg.norm(np.maximum(0.0, np.maximum(lo - p, p - hi)), axis=-1).min(axis=1)
+  x, y = p[:, 0, 0], p[:, 0, 1]
+  to_wall = np.minimum.reduce([x, AREA_W / 2 - y, y + AREA_W / 2])
+  assert np.minimum(to_box, to_wall).min() > radius + 0.15  # 0.8 m by design: room for the arm stretched too
+  assert set(np.unique(np.asarray(s.variant))) == {0, 1}

@@ -156,6 +156,8 @@ class ObservationConfig:
   rays_per_band: tuple[int, int]  # rays cast per band (along, across)
   depth_range: tuple[float, float]  # m, hits outside are 0
   noise: float = dataclasses.field(metadata=bound(0.0, 1.0, hi_open=True))  # fraction of rays hidden
+  scan_rays: int = dataclasses.field(metadata=bound(1, 360))  # N_s, the laser scan's rays (part "scan")
+  scan_range: float = dataclasses.field(metadata=bound(0.5, 30.0))  # m, a scan ray's reading where it hits nothing
 
   def validate(self, key: str) -> None:
     from mjx_tracks.envs.observations import PARTS  # noqa: PLC0415
@@ -620,7 +622,9 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines
               ("episode", "end_on_collision"): False,  # before collision safety: collisions go on
               ("randomization",): FROM_DEFAULTS,  # before sim-to-real randomization: off (enabled: false)
-              ("evaluation", "robustness"): FROM_DEFAULTS}  # evaluation only: old runs get today's
+              ("evaluation", "robustness"): FROM_DEFAULTS,  # evaluation only: old runs get today's
+              ("observation", "scan_rays"): FROM_DEFAULTS,  # before the laser scan: read only by its part,
+              ("observation", "scan_range"): FROM_DEFAULTS}  #   which no older run observes
 
 
 def _with_added_keys(raw: dict) -> dict:

@@ -29,12 +29,13 @@ class Sensors:
   goal: jax.Array  # (3,) m
   vertical_beams: jax.Array  # (N_v,) m
   horizontal_beams: jax.Array  # (N_h,) m
+  scan: jax.Array  # (N_s,) m, the 2D laser scan (mjx_tracks.envs.scan)
 
   @staticmethod
-  def spec(n_joints: int, n_vertical: int, n_horizontal: int) -> "Sensors":
+  def spec(n_joints: int, n_vertical: int, n_horizontal: int, n_scan: int) -> "Sensors":
     """Shapes only (for jax.eval_shape)."""
     f = lambda *shape: jax.ShapeDtypeStruct(shape, jnp.float32)
-    return Sensors(f(3), f(3), f(3), f(n_joints), f(3), f(3), f(n_vertical), f(n_horizontal))
+    return Sensors(f(3), f(3), f(3), f(n_joints), f(3), f(3), f(n_vertical), f(n_horizontal), f(n_scan))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,12 +75,14 @@ PARTS: dict[str, ObsPart] = {
     "angular_velocity": ObsPart("chassis angular velocity (rad/s)", lambda s, r: s.angular_velocity),
     "vertical_beams": ObsPart("vertical depth beams (m)", lambda s, r: s.vertical_beams),
     "horizontal_beams": ObsPart("horizontal depth beams (m)", lambda s, r: s.horizontal_beams),
+    "scan": ObsPart("2D laser scan around the chassis, ray k at yaw 2 pi k / N_s (m)", lambda s, r: s.scan),
 }
 
 
-def part_sizes(parts: tuple[str, ...], robot: RobotSpec, n_vertical: int, n_horizontal: int) -> dict[str, int]:
+def part_sizes(parts: tuple[str, ...], robot: RobotSpec, n_vertical: int, n_horizontal: int,
+               n_scan: int) -> dict[str, int]:
   """Size of each listed part, from the shape of its extractor's output."""
-  spec = Sensors.spec(len(robot.joint_names()), n_vertical, n_horizontal)
+  spec = Sensors.spec(len(robot.joint_names()), n_vertical, n_horizontal, n_scan)
   return {p: jax.eval_shape(lambda s, p=p: PARTS[p].extract(s, robot), spec).shape[0] for p in parts}
 
 

@@ -18,6 +18,7 @@ from mjx_tracks.envs.beams import BeamLayout, depth_beams
 from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig
 from mjx_tracks.envs.observations import Sensors, observe, part_sizes
 from mjx_tracks.envs import randomization as rnd
+from mjx_tracks.envs.scan import ScanLayout, scan
 from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, normalizer_init, on_stairs
 from mjx_tracks.metrics import STEP_NAMES as METRICS  # the per-step metrics (mjx_tracks.metrics.STEP)
 from mjx_tracks.robots import get_robot
@@ -84,13 +85,15 @@ class TrackedRobotEnv(Env):
         o.vertical_beams if "vertical_beams" in o.parts else 0,
         o.horizontal_beams if "horizontal_beams" in o.parts else 0,
         o.band_px, o.rays_per_band, o.depth_range, self.robot.camera_range[1], o.noise)
+    self.scan = ScanLayout(o.scan_rays if "scan" in o.parts else 0, o.scan_range, self.robot.lidar_pos)
     self.rand = cfg.randomization
     self.randomized = cfg.randomization.enabled or every_path  # the state carries a RobustState
     self.acting = frozenset(g for g in rnd.GROUPS if every_path or cfg.randomization.acts(g))  # costly paths compiled
     self.monitor = Monitor(cfg.reward, cfg.episode)
     c = cfg.scene.curriculum
     self.curriculum = Curriculum(window=c.window, rule=c.rule)
-    self.part_sizes = part_sizes(o.parts, self.robot, self.beams.n_vertical, self.beams.n_horizontal)
+    self.part_sizes = part_sizes(o.parts, self.robot, self.beams.n_vertical, self.beams.n_horizontal,
+                                 self.scan.n_rays)
 
   # --- Brax Env interface -------------------------------------------------------------------
   @property
@@ -254,6 +257,8 @@ class TrackedRobotEnv(Env):
                                  "hidden": r.perturbation.hidden}
     beams = (depth_beams(self.beams, m, d, self.sim.layout.camera_site, key, **real)
              if self.beams.n_features else jnp.zeros(0))
+    ranges = (scan(self.scan, m, d, self.sim.layout.chassis_body, jax.random.fold_in(key, 5),
+                   real.get("range_noise"), real.get("hidden")) if self.scan.n_rays else jnp.zeros(0))
     rot = d.xmat[self.sim.layout.chassis_body]
     rpy, rate, velocity, joints = chassis_rpy(d.qpos), d.qvel[3:6], rot.T @ d.qvel[0:3], d.qpos[self.sim.layout.joint_qpos]
     if r is not None:  # what the robot's sensors read
@@ -261,7 +266,8 @@ class TrackedRobotEnv(Env):
                                                              jax.random.fold_in(key, 3))
     return Sensors(linear_velocity=velocity, angular_velocity=rate, rpy=rpy, joints=joints,
                    position=d.qpos[0:3], goal=es.scene.goal,
-                   vertical_beams=beams[: self.beams.n_vertical], horizontal_beams=beams[self.beams.n_vertical:])
+                   vertical_beams=beams[: self.beams.n_vertical], horizontal_beams=beams[self.beams.n_vertical:],
+                   scan=ranges)
 
   def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array) -> jax.Array:
     return observe(self.cfg.observation.parts, self.sensors(es, m, key), self.robot)

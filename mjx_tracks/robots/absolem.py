@@ -32,6 +32,7 @@ ABSOLEM = RobotSpec(
     camera_resolution=(640, 480),
     camera_range=(0.02, 8.0),
     imu_pos=(0.0, 0.0, 0.0),
+    lidar_pos=(0.0, 0.0, 0.22),  # 0.09 m above the chassis top
     mu_along=1.0,
     mu_across=0.5,
     track_separation=0.5,

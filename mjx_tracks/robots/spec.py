@@ -92,6 +92,7 @@ class RobotSpec:
   camera_resolution: tuple[int, int]  # px, (width, height)
   camera_range: tuple[float, float]  # m, (near, far)
   imu_pos: tuple[float, float, float]  # m
+  lidar_pos: tuple[float, float, float]  # m, the 2D laser scanner (mjx_tracks.envs.scan) in the chassis frame
   # Track-contact (CSM) figures
   mu_along: float  # friction coefficient along the belt
   mu_across: float  # friction coefficient across the belt
