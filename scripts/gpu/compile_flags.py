@@ -1,0 +1,85 @@
+"""Issue 30, compilation: how long the PPO training step of `python -m train.run` compiles from an
+empty cache under XLA flag variants, and what each costs in training speed. Each variant runs
+`python -m train.run --task TASK --steps STEPS --early-stop none --seed 0` in its own process with
+its own empty compilation cache (MJX_TRACKS_CACHE) and MJX_TRACKS_COMPILE_LOG, then
+`python -m train.evaluate RUN --scene hardest --trials 100` (its wall time: the evaluation
+program's compilation and 100 trials). Writes OUT/compile-flags.json: per variant the run's
+"compiled in N s", its steady training steps/s (median of its [train] lines after the first), the
+ten longest XLA compilations, the evaluation's wall s; with the device, command and date.
+Usage (GPU host): python scripts/gpu/compile_flags.py OUT [--task asc-inc-cog] [--steps 600000]"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+VARIANTS = {  # name -> XLA_FLAGS added to the environment's
+    "default": "",
+    "autotune-0": "--xla_gpu_autotune_level=0",
+    "no-triton-gemm": "--xla_gpu_enable_triton_gemm=false",
+    "autotune-0-no-triton-gemm": "--xla_gpu_autotune_level=0 --xla_gpu_enable_triton_gemm=false",
+}
+
+
+def _longest(log: str, n: int = 10) -> list[list]:
+  """The n longest XLA compilations (seconds, what) in a MJX_TRACKS_COMPILE_LOG file."""
+  rows = []
+  for line in open(log, errors="replace") if os.path.exists(log) else ():
+    m = re.search(r"Finished XLA compilation of (\S+) in ([0-9.]+) sec", line)
+    if m:
+      rows.append([round(float(m.group(2)), 2), m.group(1)])
+  return sorted(rows, reverse=True)[:n]
+
+
+def _variant(name: str, flags: str, args, work: str) -> dict:
+  env = {**os.environ, "MJX_TRACKS_CACHE": f"{work}/{name}-cache", "MJX_TRACKS_COMPILE_LOG": f"{work}/{name}.compile.log",
+         "XLA_FLAGS": " ".join(x for x in (os.environ.get("XLA_FLAGS", ""), flags) if x)}
+  run = f"{work}/{name}-run"
+  cmd = [sys.executable, "-m", "train.run", "--task", args.task, "--steps", str(args.steps), "--early-stop", "none",
+         "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite"]
+  t0 = time.time()
+  out = subprocess.run(cmd, env=env, capture_output=True, text=True).stdout
+  wall = time.time() - t0
+  compiled = re.search(r"compiled in ([0-9,]+) s", out)
+  rates = [float(x.replace(",", "")) for x in re.findall(r"^\[train\].*?([0-9,]+) steps/s", out, re.M)]
+  t0 = time.time()
+  ev = subprocess.run([sys.executable, "-m", "train.evaluate", run, "--scene", "hardest", "--trials", "100",
+                       "--out", f"{work}/{name}-eval.json"], env=env, capture_output=True, text=True)
+  eval_wall = time.time() - t0
+  success = json.load(open(f"{work}/{name}-eval.json"))["metrics"]["success"]["mean"] if ev.returncode == 0 else None
+  return {"xla_flags": flags, "compile_s": float(compiled.group(1).replace(",", "")) if compiled else None,
+          "train_steps_per_s": statistics.median(rates[1:]) if len(rates) > 1 else None, "run_wall_s": round(wall, 1),
+          "eval_wall_s": round(eval_wall, 1), "eval_rc": ev.returncode, "hardest_success": success,
+          "longest_compilations": _longest(env["MJX_TRACKS_COMPILE_LOG"]), "log_tail": out[-600:]}
+
+
+def main() -> None:
+  p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+  p.add_argument("out")
+  p.add_argument("--task", default="asc-inc-cog")
+  p.add_argument("--steps", type=int, default=600_000)
+  p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of " + ", ".join(VARIANTS))
+  args = p.parse_args()
+  import jax  # noqa: PLC0415
+  device = f"{jax.devices()[0].device_kind} x {jax.device_count()}, JAX {jax.__version__}"
+  results = {}
+  with tempfile.TemporaryDirectory() as work:
+    for name in args.variants.split(","):
+      results[name] = _variant(name, VARIANTS[name], args, work)
+      print(name, {k: v for k, v in results[name].items() if k not in ("log_tail", "longest_compilations")}, flush=True)
+      os.makedirs(args.out, exist_ok=True)
+      json.dump({"device": device, "command": "python scripts/gpu/compile_flags.py " + " ".join(sys.argv[1:]),
+                 "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                 "variants": results}, open(f"{args.out}/compile-flags.json", "w"), indent=1)
+
+
+if __name__ == "__main__":
+  main()
