@@ -115,3 +115,16 @@ def test_the_preset_says_when_a_run_stops_unless_the_command_line_does(argv, exp
   plan = plan_run(parser().parse_args([*argv, "--out", str(tmp_path / "run")]))
   assert (str(plan.early_stop) if plan.early_stop else None) == expected
   assert plan.probe_every > 0 or expected is None
+
+
+@pytest.mark.parametrize("task, argv, every", [
+    ("asc-inc-cog", [], 81_920),  # 50-step episodes: the preset's interval
+    ("step-up", [], 2 * 81_920),  # 80 steps: a probe costs 1.6x, the interval doubles
+    ("nav", [], 5 * 81_920),  # 240 steps: 4.8x, five intervals
+    ("nav", ["--hp", "probe_steps=100000"], 500_000),  # the preset's field scales alike
+    ("nav", ["--probe-every", "1000000"], 1_000_000)])  # asked for: as asked
+def test_the_probe_interval_grows_with_the_probe_episodes_length(task, argv, every, tmp_path):
+  from train.core.plan import plan_run
+  from train.run import parser
+  plan = plan_run(parser().parse_args(["--task", task, "--preset", "gpu", *argv, "--out", str(tmp_path / "run")]))
+  assert plan.probe_every == every
