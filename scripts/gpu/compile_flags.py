@@ -44,7 +44,8 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
          "XLA_FLAGS": " ".join(x for x in (os.environ.get("XLA_FLAGS", ""), flags) if x)}
   run = f"{work}/{name}-run"
   cmd = [sys.executable, "-m", "train.run", "--task", args.task, "--steps", str(args.steps), "--early-stop", "none",
-         "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite"]
+         "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite",
+         "--hp", "training_metrics_steps=81920"]  # a [train] line (steps/s) every PPO update
   t0 = time.time()
   out = subprocess.run(cmd, env=env, capture_output=True, text=True).stdout
   wall = time.time() - t0
