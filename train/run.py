@@ -7,6 +7,7 @@
     python -m train.run --resume runs/a --steps 8000000         # train a finished run further
     python -m train.run --task des-inc-ang --hp discounting=0.995  # a preset's hyper-parameter
     python -m train.run --task asc-inc-cog --library brax       # Brax's own ppo.train (no checkpoints)
+    python -m train.run --task nav --seeds 0,1,2,3,4 --out runs/nav  # 5 runs in one program: runs/nav/s0 ...
 
 Writes into the run directory: run.json, checkpoints/ (orbax, the whole training state, every
 --checkpoint-every seconds and at the end), policy/ (the exported policy), tb/ (TensorBoard);
@@ -44,6 +45,9 @@ def parser() -> argparse.ArgumentParser:
                                                 "(default: the preset's)")
   p.add_argument("--steps", type=int, help="total environment steps (default: the preset's)")
   p.add_argument("--seed", type=int, help="default 0")
+  p.add_argument("--seeds", metavar="S,S,...",
+                 help="several runs that differ only in their seed, trained as one vmapped program on one "
+                      "device, each a run of its own (folder OUT/s<seed>, records, early stop, --resume)")
   p.add_argument("--out", help="run directory (default runs/<run id>)")
   p.add_argument("--db", help="experiment database (default: experiments.sqlite beside the run directory)")
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -114,6 +118,56 @@ def _train(plan: RunPlan, args) -> int:
           f"python -m train.run --resume {plan.out_dir}", file=sys.stderr, flush=True)
     return stop.exit_code
   print(finished_lines(plan, final, getattr(db, "path", None)), flush=True)
+  return 0
+
+
+def group_plans(args) -> list[RunPlan]:
+  """One plan per seed of --seeds (each folder OUT/s<seed>; without --out, runs/<its run id>)."""
+  bad = [flag for flag, given in (("--seed", args.seed is not None), ("--resume", args.resume),
+                                  ("--coordinator", args.coordinator),
+                                  ("--library " + str(args.library), args.library not in (None, DEFAULT_LIBRARY)))
+         if given]
+  if bad:
+    raise RunError(f"--seeds does not go with {', '.join(bad)} (resume each run alone: --resume OUT/s<seed>)")
+  try:
+    seeds = [int(x) for x in args.seeds.split(",")]
+  except ValueError:
+    raise RunError(f"--seeds takes whole numbers separated by commas, e.g. 0,1,2; got {args.seeds!r}") from None
+  if len(set(seeds)) != len(seeds) or len(seeds) < 2:
+    raise RunError(f"--seeds needs at least two different seeds; got {args.seeds!r}")
+  return [plan_run(argparse.Namespace(**{**vars(args), "seed": s, "seeds": None,
+                                         "out": os.path.join(args.out, f"s{s}") if args.out else None}))
+          for s in seeds]
+
+
+def _train_group(plans: list[RunPlan], args) -> int:
+  """The runs of --seeds in one program (train.core.group): each run's records as a run's own."""
+  from train.core.group import prepare_group, train_group  # noqa: PLC0415
+  from train.core.interrupts import StopRequest  # noqa: PLC0415
+  from train.core.session import SessionOptions, device_summary  # noqa: PLC0415
+  p = plans[0]
+  print(f"{len(plans)} runs ({', '.join(q.run_id for q in plans)}): {p.algo} ({p.preset_name} preset), "
+        f"{p.num_envs} envs each, in one program on {device_summary()}, {p.total_steps:,} steps each", flush=True)
+  with StopRequest() as stop:
+    try:
+      t = prepare_group(plans)
+    except RunError as e:
+      print(f"error: {e}", file=sys.stderr)
+      return 2
+    dbs = [_start_records(q, args.db) for q in plans]
+    finals, statuses = [{} for _ in plans], ["crashed"] * len(plans)
+    try:
+      finals = train_group(t, plans, dbs[0], stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints))
+      statuses = [STATUS[f["reason"]] for f in finals]
+    finally:
+      for q, db, final, status in zip(plans, dbs, finals, statuses):
+        db.finish(q.run_id, status, final, final.get("step"), _detail(status, stop, q))
+  for q, final in zip(plans, finals):
+    print(f"s{q.seed}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
+  if "interrupted" in statuses:
+    print("interrupted: checkpoints and policies saved; continue each run alone with:\n"
+          + "\n".join(f"  python -m train.run --resume {q.out_dir}" for q in plans), file=sys.stderr, flush=True)
+    return stop.exit_code
   return 0
 
 
@@ -212,11 +266,11 @@ def main(argv: list[str] | None = None) -> int:
     jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
   try:
     try:
-      plan = plan_run(args)
+      plans = group_plans(args) if args.seeds is not None else [plan_run(args)]
     except (RunError, ConfigError) as e:
       print(f"error: {e}", file=sys.stderr)
       return 2
-    return _train(plan, args)
+    return _train(plans[0], args) if args.seeds is None else _train_group(plans, args)
   finally:
     if args.coordinator:  # all processes leave together: no "WatchTasks failed" lines from a late one
       import jax  # noqa: PLC0415

@@ -71,6 +71,11 @@ def main(argv=None) -> int:
     print(f"error: {args.check} was recorded on {recorded.get('device')}, this is {here}: the digests are bit "
           "for bit and differ between platforms; record one here with --write", file=sys.stderr)
     return 2
+  versions = _versions()
+  if args.check and recorded.get("versions", {}) != versions:
+    print(f"note: recorded with {recorded.get('versions', 'unknown packages')}, this is {versions}: the "
+          "digests may differ for the packages alone (record one with --write before changing code)",
+          file=sys.stderr)
   digests, differ = {}, []
   for task in args.tasks:
     digests[task] = rollout_digest(task)
@@ -79,7 +84,7 @@ def main(argv=None) -> int:
     print(f"{task:15s} {digests[task][:16]}{same}", file=sys.stderr, flush=True)
   if args.write:
     record = {"what": __doc__.split("\n\n")[0], "command": "python -m mjx_tracks.tools.rollout_digest --write " + args.write,
-              "device": here, "jax": jax.__version__,
+              "device": here, "jax": jax.__version__, "versions": versions,
               "n_envs": N_ENVS, "n_steps": N_STEPS, "episode_steps": EPISODE_STEPS, "seed": SEED, "digests": digests}
     with open(args.write, "w") as f:
       json.dump(record, f, indent=1)
@@ -87,6 +92,12 @@ def main(argv=None) -> int:
   if differ:
     print(f"differ: {', '.join(differ)}", file=sys.stderr)
   return 1 if differ else 0
+
+
+def _versions() -> dict[str, str]:
+  """The packages whose numerics a digest depends on."""
+  from importlib import metadata  # noqa: PLC0415
+  return {name: metadata.version(name) for name in ("jax", "jaxlib", "mujoco", "mujoco-mjx")}
 
 
 if __name__ == "__main__":

@@ -76,62 +76,14 @@ class Schedule:
   on_milestone: Callable | None = None
 
 
-class Loop:
-  """Runs updates from a step until a total; see `run`."""
+class Clock:
+  """Training time: wall time less the time spent evaluating, checkpointing or exporting between
+  updates (shared by the runs of one program: one run's evaluation pauses them all)."""
 
-  def __init__(self, update, steps_per_update: int, checkpointer: Checkpointer, reporter, stop,
-               schedule: Schedule):
-    """update(state) -> (state, metrics); reporter(step, metrics) -> a report row; stop.requested:
-    not None once a stop was asked for."""
-    self.update, self.spu = update, steps_per_update
-    self.milestones, self.on_milestone = schedule.milestones, schedule.on_milestone
-    self.checkpointer, self.reporter, self.stop = checkpointer, reporter, stop
-    self.report_every = max(schedule.report_every, steps_per_update)
-    self.early = schedule.early_stop
-    self.evals = [(f, every) for f, every in schedule.evaluations if f and every]
+  def __init__(self):
+    self.paused_s = 0.0
 
-  def run(self, state, step: int, total: int) -> LoopResult:
-    """Updates until `total` steps, an early stop or a stop request; the state at the end is
-    checkpointed by the caller."""
-    acc, pending = EpisodeAccumulator(), []
-    next_report, next_evals = step + self.report_every, [self._next(step, e) for _, e in self.evals]
-    self.checkpointer.last_t = self.mark_t = time.monotonic()
-    self.mark_step, self.paused_s = step, 0.0
-    reason, streak = "done", 0
-    milestones = [b for b in self.milestones if b > step]  # a resumed run passed the others already
-    while step < total and reason == "done":
-      stop, ckpt = _agree(self.stop.requested is not None, self.checkpointer.due())
-      if stop:
-        reason = "interrupted"
-        break
-      if ckpt:
-        self._paused(self.checkpointer.save, state, step)
-      state, metrics = self.update(state)
-      step += self.spu
-      pending.append(metrics)
-      while milestones and step >= milestones[0] and self.on_milestone is not None:
-        self._paused(self.on_milestone, state, step, milestones.pop(0))
-      rows = []
-      if step >= next_report or step >= total:
-        rows.append(self._report(step, acc, pending))
-        pending, next_report = [], next_report + self.report_every
-      for i, (evaluate, every) in enumerate(self.evals):
-        if step >= next_evals[i]:
-          rows.append(self.reporter(step, self._paused(evaluate, state)))
-          next_evals[i] = self._next(step, every)
-      if self.early is not None:
-        for r in rows:
-          streak = self.early.streak(streak, r)
-        reason = "early_stop" if streak >= self.early.times else reason
-    if pending:
-      self._report(step, acc, pending)
-    return LoopResult(state, step, reason)
-
-  @staticmethod
-  def _next(step: int, every: int) -> int:
-    return (step // every + 1) * every
-
-  def _paused(self, fn, *args):
+  def paused(self, fn, *args):
     """fn(*args), its time left out of the training throughput; the updates already dispatched
     finish first, so their time stays in it."""
     jax.block_until_ready(args)
@@ -140,10 +92,89 @@ class Loop:
     self.paused_s += time.monotonic() - t0
     return out
 
-  def _report(self, step: int, acc: EpisodeAccumulator, pending: list) -> dict:
-    for m in pending:
-      acc.add({k: local_value(v) for k, v in m.items()})  # waits for the last update
+
+class Track:
+  """One run's bookkeeping between updates: progress reports, evaluations, milestones and the
+  early-stop streak; `index`: the run's slot in the metrics of a program of several runs (None: one run)."""
+
+  def __init__(self, spu: int, reporter, schedule: "Schedule", clock: Clock, step: int, index: int | None = None):
+    self.reporter, self.clock, self.index = reporter, clock, index
+    self.report_every = max(schedule.report_every, spu)
+    self.early, self.on_milestone = schedule.early_stop, schedule.on_milestone
+    self.evals = [(f, every) for f, every in schedule.evaluations if f and every]
+    self.milestones = [b for b in schedule.milestones if b > step]  # a resumed run passed the others already
+    self.acc, self.pending, self.streak = EpisodeAccumulator(), [], 0
+    self.next_report, self.next_evals = step + self.report_every, [_next(step, e) for _, e in self.evals]
+    self.mark_t, self.mark_step, self.mark_paused = time.monotonic(), step, clock.paused_s
+
+  def after_update(self, state_of: Callable[[], Any], step: int, metrics, total: int) -> str:
+    """Everything due after the update that reached `step` ("early_stop" once the criterion is met,
+    else "done"); state_of() gives the run's state (only asked for where something needs it)."""
+    self.pending.append(metrics)
+    while self.milestones and step >= self.milestones[0] and self.on_milestone is not None:
+      self.clock.paused(self.on_milestone, state_of(), step, self.milestones.pop(0))
+    rows = []
+    if step >= self.next_report or step >= total:
+      rows.append(self.report(step))
+      self.next_report += self.report_every
+    for i, (evaluate, every) in enumerate(self.evals):
+      if step >= self.next_evals[i]:
+        rows.append(self.reporter(step, self.clock.paused(evaluate, state_of())))
+        self.next_evals[i] = _next(step, every)
+    if self.early is not None:
+      for r in rows:
+        self.streak = self.early.streak(self.streak, r)
+      if self.streak >= self.early.times:
+        return "early_stop"
+    return "done"
+
+  def report(self, step: int) -> dict:
+    """The progress row of the updates since the last one (their metrics waited for)."""
+    for m in self.pending:
+      self.acc.add({k: local_value(v) if self.index is None else local_value(v)[self.index] for k, v in m.items()})
+    self.pending = []
     now = time.monotonic()
-    sps = (step - self.mark_step) / max(now - self.mark_t - self.paused_s, 1e-9)
-    self.mark_t, self.mark_step, self.paused_s = now, step, 0.0
-    return self.reporter(step, {**acc.take(), "training/steps_per_s": sps})
+    trained_s = now - self.mark_t - (self.clock.paused_s - self.mark_paused)
+    sps = (step - self.mark_step) / max(trained_s, 1e-9)
+    self.mark_t, self.mark_step, self.mark_paused = now, step, self.clock.paused_s
+    return self.reporter(step, {**self.acc.take(), "training/steps_per_s": sps})
+
+  def flush(self, step: int) -> None:
+    """Reports the updates not reported yet."""
+    if self.pending:
+      self.report(step)
+
+
+def _next(step: int, every: int) -> int:
+  return (step // every + 1) * every
+
+
+class Loop:
+  """Runs updates from a step until a total; see `run`."""
+
+  def __init__(self, update, steps_per_update: int, checkpointer: Checkpointer, reporter, stop,
+               schedule: Schedule):
+    """update(state) -> (state, metrics); reporter(step, metrics) -> a report row; stop.requested:
+    not None once a stop was asked for."""
+    self.update, self.spu, self.schedule = update, steps_per_update, schedule
+    self.checkpointer, self.reporter, self.stop = checkpointer, reporter, stop
+
+  def run(self, state, step: int, total: int) -> LoopResult:
+    """Updates until `total` steps, an early stop or a stop request; the state at the end is
+    checkpointed by the caller."""
+    clock = Clock()
+    track = Track(self.spu, self.reporter, self.schedule, clock, step)
+    self.checkpointer.last_t = time.monotonic()
+    reason = "done"
+    while step < total and reason == "done":
+      stop, ckpt = _agree(self.stop.requested is not None, self.checkpointer.due())
+      if stop:
+        reason = "interrupted"
+        break
+      if ckpt:
+        clock.paused(self.checkpointer.save, state, step)
+      state, metrics = self.update(state)
+      step += self.spu
+      reason = track.after_update(lambda: state, step, metrics, total)
+    track.flush(step)
+    return LoopResult(state, step, reason)

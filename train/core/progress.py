@@ -102,3 +102,4 @@ class Reporter:
   def close(self) -> None:
     if self.writer:
       self.writer.close()
+      self.writer = None  # closing twice is harmless

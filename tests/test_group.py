@@ -1,0 +1,129 @@
+"""Several runs in one compiled program (`train.run --seeds`): the per-run loop with fakes, the
+program's runs kept apart, and the command end to end."""
+
+import json
+import os
+import types
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from helpers import TRAIN_TINY
+
+from train import db as dbmod
+from train import run
+from train.core.checkpoints import RunCheckpoints
+from train.core.early_stop import EarlyStop
+from train.core.group_loop import GroupLoop, Member
+from train.core.loop import Checkpointer, Schedule
+
+
+class Rows:
+  def __init__(self):
+    self.rows = []
+
+  def __call__(self, step, metrics):
+    row = {"step": step, "source": "probe" if "probe/success_rate" in metrics else "train",
+           "success_rate": metrics.get("probe/success_rate")}
+    self.rows.append(row)
+    return row
+
+
+def test_each_run_stops_on_its_own_probe_and_is_finished_with_the_state_it_had_then():
+  """Two runs of 100-step updates; run 0's probe reads 0.98 from its second probe, run 1's never:
+  run 0 is finished at step 400 with the state it had then (its slot computed on, and discarded),
+  run 1 trains to the end."""
+  probe_values = {0: iter([0.5, 0.98, 0.99]), 1: iter([0.1] * 20)}
+  finished = []
+
+  def update(states):  # every slot counts the updates it has seen
+    return states + 1, {"episode/sum_reward": np.zeros(2)}
+
+  members, reporters = [], []
+  for i in (0, 1):
+    reporters.append(Rows())
+    probe = lambda s, i=i: {"probe/success_rate": next(probe_values[i])}  # noqa: E731
+    members.append(Member(Checkpointer(None, {}, None, lambda step: None, every_s=1e9), reporters[i],
+                          Schedule(100, EarlyStop("success", 0.97, 1), ((probe, 200),)),
+                          lambda r, i=i: finished.append(i) or (r.reason, r.step, int(r.state))))
+  results = GroupLoop(update, 100, members, types.SimpleNamespace(requested=None)).run(np.zeros(2, np.int64), 0, 1_000)
+  assert results == [("early_stop", 400, 4), ("done", 1_000, 10)] and finished == [0, 1]
+  assert [r["step"] for r in reporters[0].rows if r["source"] == "probe"] == [200, 400]
+  assert len([r for r in reporters[1].rows if r["source"] == "probe"]) == 5
+
+
+def test_a_stop_request_ends_every_run_of_the_program():
+  members = [Member(Checkpointer(None, {}, None, lambda step: None, every_s=1e9), Rows(), Schedule(100),
+                    lambda r: (r.reason, r.step)) for _ in (0, 1)]
+  results = GroupLoop(lambda s: (s + 1, {}), 100, members, types.SimpleNamespace(requested=15)).run(np.zeros(2), 0, 500)
+  assert results == [("interrupted", 0)] * 2
+
+
+def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
+  out, database = str(tmp_path / "group"), str(tmp_path / "db.sqlite")
+  assert run.main([*TRAIN_TINY, "--seeds", "0,1", "--steps", "1024", "--out", out, "--db", database,
+                   "--probe-every", "512", "--checkpoint-every", "0"]) == 0
+  said = capsys.readouterr().out
+  assert "2 runs" in said and "in one program" in said and "s0 [train]" in said and "s1 [probe]" in said
+  d = dbmod.ExperimentDB(database)
+  runs = {r["seed"]: r for r in d.runs()}
+  assert set(runs) == {0, 1} and all(r["status"] == "done" for r in runs.values())
+  params = []
+  for seed in (0, 1):
+    folder = os.path.join(out, f"s{seed}")
+    record = json.load(open(os.path.join(folder, "run.json")))
+    assert record["seed"] == seed and record["run_id"] == runs[seed]["run_id"]
+    assert RunCheckpoints(folder).latest_step() == 1024 and os.path.isdir(os.path.join(folder, "policy"))
+    sources = {(r["source"], r["step"]) for r in d.stats(record["run_id"])}
+    assert ("train", 1024) in sources and ("probe", 512) in sources and ("probe", 1024) in sources
+    params.append(RunCheckpoints(folder).restore()[0])
+  leaves = [jax.tree_util.tree_leaves(p) for p in params]
+  assert any(np.asarray(a).shape == np.asarray(b).shape and not np.array_equal(a, b)
+             for a, b in zip(*leaves))  # two seeds, two runs
+  # any run of the program continues alone, as a run of its own
+  assert run.main(["--resume", os.path.join(out, "s1"), "--steps", "1536", "--db", database]) == 0
+  assert "from its checkpoint at step 1,024" in capsys.readouterr().out
+  assert RunCheckpoints(os.path.join(out, "s1")).latest_step() == 1536
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--seeds", "0,1", "--seed", "3"], "does not go with --seed"),
+    (["--seeds", "0,x"], "whole numbers"),
+    (["--seeds", "2,2"], "two different seeds"),
+    (["--seeds", "4"], "two different seeds"),
+    (["--seeds", "0,1", "--library", "brax"], "does not go with --library brax")])
+def test_bad_seeds_fail_with_one_line_before_anything_is_written(argv, words, tmp_path, capsys):
+  assert run.main([*TRAIN_TINY, *argv, "--out", str(tmp_path / "g")]) == 2
+  assert words in capsys.readouterr().err and not os.path.exists(tmp_path / "g")
+
+
+def test_the_runs_of_one_program_do_not_see_each_other(tmp_path):
+  """Each run starts from its separate run's state; run 0's update, with run 1 being seed 1 or seed
+  2: bit for bit the same (no statistic, curriculum or normalizer shared across the program's
+  runs); run 1's differs."""
+  from train.core.group import build_group, compile_group
+  from train.core.plan import plan_run
+  t = build_group([plan_run(run.parser().parse_args([*TRAIN_TINY, "--seed", "0", "--out", str(tmp_path / "r")]))])
+  update = compile_group(t, 2)
+  init = jax.jit(jax.vmap(t.learner.init))
+  alone = jax.jit(t.learner.init)(jax.random.PRNGKey(2))  # each run starts from its separate run's state
+  together = init(jnp.stack([jax.random.PRNGKey(0), jax.random.PRNGKey(2)]))
+  assert all(np.array_equal(np.asarray(a), np.asarray(b)[1])
+             for a, b in zip(jax.tree_util.tree_leaves(alone), jax.tree_util.tree_leaves(together)))
+  out = [update(init(jnp.stack([jax.random.PRNGKey(0), jax.random.PRNGKey(other)])))[0] for other in (1, 2)]
+  leaves = [jax.tree_util.tree_leaves(o) for o in out]
+  assert all(np.array_equal(np.asarray(a)[0], np.asarray(b)[0]) for a, b in zip(*leaves))
+  assert not all(np.array_equal(np.asarray(a)[1], np.asarray(b)[1]) for a, b in zip(*leaves))
+
+
+def test_runs_whose_states_do_not_fit_are_refused_in_one_line(tmp_path):
+  from train.core.group import build_group, check_memory, state_bytes
+  from train.core.plan import RunError, plan_run
+  t = build_group([plan_run(run.parser().parse_args(["--task", "asc-inc-cog", "--algo", "sac", "--preset", "paper",
+                                                      "--out", str(tmp_path / "r")]))])
+  one = state_bytes(t)
+  assert one > 4e8  # the paper preset's 1,000,000-transition replay buffer dominates
+  check_memory(t, 20, 41 * one)
+  with pytest.raises(RunError, match=r"20 runs need ~.* GB .* fewer seeds or a smaller replay buffer"):
+    check_memory(t, 20, 39 * one)

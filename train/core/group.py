@@ -1,0 +1,143 @@
+"""Several runs in one compiled program (`python -m train.run --seeds 0,1,2`): runs that differ
+only in their seed train as one vmapped update on one device. Each run keeps everything a run of
+its own has: its folder (run.json, checkpoints/, policy/, tb/), its database rows, its probe and
+early stop (a finished run is checkpointed and exported at once, its slot computed and
+discarded from then on), its milestones; `python -m train.run --resume
+RUN` continues any of them alone. The probe and Brax's evaluator are compiled once for all."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import sys
+import time
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from train.core.build import Training, build, make_evaluator
+from train.core.checkpoints import RunCheckpoints
+from train.core.group_loop import GroupLoop, Member
+from train.core.loop import Checkpointer, Schedule
+from train.core.mesh import to_host
+from train.core.plan import RunError, RunPlan
+from train.core.probe import Probe
+from train.core.progress import Reporter
+from train.core.session import SessionOptions, _export
+from train.evaluation import milestone_folder
+
+
+class Prefixed:
+  """A text stream that starts each line with a run's tag (its seed), for one shared terminal."""
+
+  def __init__(self, tag: str, stream=None):
+    self.tag, self.stream, self.fresh = tag, stream, True
+
+  def write(self, text: str) -> int:
+    out = self.stream or sys.stdout
+    for piece in text.splitlines(keepends=True):
+      out.write((self.tag if self.fresh else "") + piece)
+      self.fresh = piece.endswith("\n")
+    return len(text)
+
+  def flush(self) -> None:
+    (self.stream or sys.stdout).flush()
+
+
+def build_group(plans: list[RunPlan]) -> Training:
+  """The one build the runs share (the first plan's; the others differ in seed and folder only)."""
+  base = plans[0]
+  for p in plans[1:]:
+    if dataclasses.replace(p, seed=base.seed, out_dir=base.out_dir, run_id=base.run_id) != base:
+      raise RunError("--seeds: the runs of one program may differ in their seed only")
+  t = build(base)
+  if t.mesh.devices.size != 1:
+    raise RunError(f"--seeds trains on one device; this process sees {t.mesh.devices.size} "
+                   "(limit it, e.g. CUDA_VISIBLE_DEVICES=0)")
+  return t
+
+
+def state_bytes(t: Training) -> int:
+  """Bytes of one run's learner state (parameters, optimizer, environments, replay buffer)."""
+  return sum(a.size * a.dtype.itemsize for a in jax.tree_util.tree_leaves(t.abstract))
+
+
+def free_bytes() -> int | None:
+  """Memory free on the device the program runs on (bytes), where it can be told."""
+  device = jax.devices()[0]
+  stats = device.memory_stats() if device.platform != "cpu" else None
+  if stats and "bytes_limit" in stats:
+    return stats["bytes_limit"] - stats.get("bytes_in_use", 0)
+  try:
+    return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+  except (ValueError, OSError, AttributeError):
+    return None
+
+
+def check_memory(t: Training, n: int, free: int | None) -> None:
+  """Refuses (RunError, one line) n runs whose states and the update's copy of them do not fit."""
+  need = 2 * n * state_bytes(t)  # the states and the update's output (donation frees the input only after)
+  if free is not None and need > free:
+    hint = " or a smaller replay buffer (--hp max_replay_size=N)" if t.plan.algo == "sac" else ""
+    raise RunError(f"--seeds: {n} runs need ~{need / 1e9:.1f} GB for their states, more than the "
+                   f"{free / 1e9:.1f} GB free on {jax.devices()[0].platform}; fewer seeds{hint}")
+
+
+def compile_group(t: Training, n: int, stream=None):
+  """The vmapped update of n runs, compiled ahead of time with the states donated."""
+  stream = stream or sys.stdout  # as it is now (a test's capture), not as it was at import
+  print(f"compiling the training step of {n} runs in one program ...", file=stream, flush=True)
+  t0 = time.time()
+  shaped = jax.tree_util.tree_map(lambda a: jax.ShapeDtypeStruct((n,) + a.shape, a.dtype), t.abstract)
+  compiled = jax.jit(jax.vmap(t.learner.update), donate_argnums=0).lower(shaped).compile()
+  print(f"compiled in {time.time() - t0:,.0f} s", file=stream, flush=True)
+  return compiled
+
+
+def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions) -> tuple[Member, Reporter]:
+  """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of every run."""
+  ti = dataclasses.replace(t, plan=plan)
+  ckpts = RunCheckpoints(plan.out_dir, options.keep_checkpoints)
+  meta = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": t.spec.to_json()}
+  checkpointer = Checkpointer(ckpts, meta, t.learner, lambda s, r=plan.run_id: db.set_checkpoint(r, ckpts.dir, s),
+                              options.checkpoint_every_s)
+  reporter = Reporter(plan.total_steps, 0, db, plan.run_id, f"{plan.out_dir}/tb", stream=Prefixed(f"s{plan.seed} "))
+  evaluate, probe = shared
+  eval_every = -(-plan.total_steps // max(plan.preset.num_evals - 1, 1))
+  schedule = Schedule(plan.preset.training_metrics_steps, plan.early_stop,
+                      ((evaluate, eval_every), (probe if plan.probe_every else None, plan.probe_every)), plan.milestones,
+                      lambda state, step, budget: _export(ti, state, step, milestone_folder(budget)))
+
+  def finish(result) -> dict[str, Any]:  # the run's checkpoint, policy and summary, as soon as it ends
+    checkpointer.save(result.state, result.step)
+    policy = _export(ti, result.state, result.step)
+    reporter.close()
+    return {"step": result.step, "reason": result.reason, "policy": policy, **reporter.latest, **reporter.latest_probe}
+
+  return Member(checkpointer, reporter, schedule, finish), reporter
+
+
+def prepare_group(plans: list[RunPlan]) -> Training:
+  """The shared build, checked to fit on the device (RunError before any record is written)."""
+  t = build_group(plans)
+  check_memory(t, len(plans), free_bytes())
+  return t
+
+
+def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOptions = SessionOptions()) -> list[dict[str, Any]]:
+  """Trains the runs (t: prepare_group's) as one program until their total steps, early stops or a
+  stop request; each run is checkpointed and exported as it ends; returns each run's summary (as
+  train.core.session.train)."""
+  states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(p.seed) for p in plans]))
+  update = compile_group(t, len(plans))
+  ev = make_evaluator(t, plans[0].seed)
+  evaluate = None if ev is None else (
+      lambda state: ev.run_evaluation(to_host(t.learner.policy_params(state)), training_metrics={}))
+  probe = Probe(t) if any(p.probe_every for p in plans) else None
+  parts = [_member(t, p, db, (evaluate, probe), options) for p in plans]
+  try:
+    return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop).run(states, 0, plans[0].total_steps)
+  finally:
+    for _, reporter in parts:
+      reporter.close()
