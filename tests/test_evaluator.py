@@ -10,7 +10,7 @@ from helpers import TINY
 from train.core.build import build, init_state
 from train.core.plan import plan_run
 from train.run import parser
-from train.core.session import _evaluator
+from train.core.session import evaluator_of
 
 
 def test_a_preset_with_evaluations_evaluates_a_fresh_policy_on_uniform_scenes(tmp_path):
@@ -18,6 +18,6 @@ def test_a_preset_with_evaluations_evaluates_a_fresh_policy_on_uniform_scenes(tm
                                        "--out", str(tmp_path / "run")]))
   plan = dataclasses.replace(plan, preset=dataclasses.replace(plan.preset, num_evals=2, num_eval_envs=4))
   t = build(plan)
-  metrics = _evaluator(t)(init_state(t, 0))
+  metrics = evaluator_of(t)(init_state(t, 0))
   assert np.isfinite(metrics["eval/episode_reward"]) and metrics["eval/avg_episode_length"] > 0
   assert 0.0 <= metrics["eval/episode_progress"] <= 1.0 and 0.0 <= metrics["eval/episode_goal_reached"] <= 1.0

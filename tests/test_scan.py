@@ -8,7 +8,7 @@ import pytest
 from mujoco import mjx
 
 import mjx_tracks
-from mjx_tracks.envs.scan import ScanLayout, scan
+from mjx_tracks.envs.scan import ScanLayout, scan_ranges
 
 GEOMGROUP = np.array([1, 0, 0, 0, 0, 0], np.uint8)  # the world group, as beams.RAY_GROUPS
 
@@ -35,7 +35,7 @@ def test_scan_reads_mj_ray_distances_capped_at_its_range(nav_env):
     m = sim.with_boxes(s.box_pos, s.box_size)
     d = sim.init_data(jnp.zeros(3), jnp.float32(0.0), jnp.zeros(sim.layout.n_joints))
     d = mjx.kinematics(m, d.replace(qpos=d.qpos.at[:7].set(root)))
-    return s, scan(layout, m, d, body)
+    return s, scan_ranges(layout, m, d, body)
 
   rng = np.random.default_rng(0)
   capped = near = 0
@@ -66,7 +66,7 @@ def test_scan_noise_loses_rays_with_their_probability(nav_env):
   m = nav_env.sim.with_boxes(s.box_pos, s.box_size)
   d = nav_env.sim.init_data(s.spawn_pos, s.spawn_yaw, jnp.zeros(nav_env.sim.layout.n_joints))
   d = mjx.kinematics(m, d)
-  run = jax.jit(lambda k, r, h: scan(layout, m, d, nav_env.sim.layout.chassis_body, k, r, h))
+  run = jax.jit(lambda k, r, h: scan_ranges(layout, m, d, nav_env.sim.layout.chassis_body, k, r, h))
   exact = np.asarray(run(jax.random.PRNGKey(1), 0.0, 0.0))
   assert (exact < 30.0).all()
   lost = np.mean([np.asarray(run(jax.random.PRNGKey(k), 0.0, 0.2)) == 30.0 for k in range(10)])

@@ -40,7 +40,7 @@ class ScanLayout:
     return body_pos + body_mat @ jnp.asarray(self.mount, jnp.float32), jnp.asarray(self.directions()) @ body_mat.T
 
 
-def scan(layout: ScanLayout, m: mjx.Model, d: mjx.Data, body: int, key: jax.Array | None = None,
+def scan_ranges(layout: ScanLayout, m: mjx.Model, d: mjx.Data, body: int, key: jax.Array | None = None,
          range_noise=None, hidden=None) -> jax.Array:
   """(N_s,) distances (m) in [0, max_range] from the scanner on `body` (module docstring)."""
   pnt, vecs = layout.world_rays(d.xpos[body], d.xmat[body])

@@ -18,7 +18,7 @@ from mjx_tracks.envs.beams import BeamLayout, depth_beams
 from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig
 from mjx_tracks.envs.observations import Sensors, observe, part_sizes
 from mjx_tracks.envs import randomization as rnd
-from mjx_tracks.envs.scan import ScanLayout, scan
+from mjx_tracks.envs.scan import ScanLayout, scan_ranges
 from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, normalizer_init, on_stairs
 from mjx_tracks.metrics import STEP_NAMES as METRICS  # the per-step metrics (mjx_tracks.metrics.STEP)
 from mjx_tracks.robots import get_robot
@@ -257,7 +257,7 @@ class TrackedRobotEnv(Env):
                                  "hidden": r.perturbation.hidden}
     beams = (depth_beams(self.beams, m, d, self.sim.layout.camera_site, key, **real)
              if self.beams.n_features else jnp.zeros(0))
-    ranges = (scan(self.scan, m, d, self.sim.layout.chassis_body, jax.random.fold_in(key, 5),
+    ranges = (scan_ranges(self.scan, m, d, self.sim.layout.chassis_body, jax.random.fold_in(key, 5),
                    real.get("range_noise"), real.get("hidden")) if self.scan.n_rays else jnp.zeros(0))
     rot = d.xmat[self.sim.layout.chassis_body]
     rpy, rate, velocity, joints = chassis_rpy(d.qpos), d.qvel[3:6], rot.T @ d.qvel[0:3], d.qpos[self.sim.layout.joint_qpos]

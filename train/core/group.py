@@ -16,16 +16,12 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
-from train.core.build import Training, build, make_evaluator
-from train.core.checkpoints import RunCheckpoints
+from train.core.build import Training, build
 from train.core.group_loop import GroupLoop, Member
-from train.core.loop import Checkpointer, Schedule
-from train.core.mesh import to_host
 from train.core.plan import RunError, RunPlan
 from train.core.probe import Probe
 from train.core.progress import Reporter
-from train.core.session import SessionOptions, _export
-from train.evaluation import milestone_folder
+from train.core.session import SessionOptions, checkpointer_of, evaluator_of, finish_run, schedule_of
 
 
 class Prefixed:
@@ -98,24 +94,16 @@ def compile_group(t: Training, n: int, stream=None):
 def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions) -> tuple[Member, Reporter]:
   """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of every run."""
   ti = dataclasses.replace(t, plan=plan)
-  ckpts = RunCheckpoints(plan.out_dir, options.keep_checkpoints)
-  meta = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": t.spec.to_json()}
-  checkpointer = Checkpointer(ckpts, meta, t.learner, lambda s, r=plan.run_id: db.set_checkpoint(r, ckpts.dir, s),
-                              options.checkpoint_every_s)
+  checkpointer = checkpointer_of(ti, db, options)
   reporter = Reporter(plan.total_steps, 0, db, plan.run_id, f"{plan.out_dir}/tb", stream=Prefixed(f"s{plan.seed} "))
-  evaluate, probe = shared
-  eval_every = -(-plan.total_steps // max(plan.preset.num_evals - 1, 1))
-  schedule = Schedule(plan.preset.training_metrics_steps, plan.early_stop,
-                      ((evaluate, eval_every), (probe if plan.probe_every else None, plan.probe_every)), plan.milestones,
-                      lambda state, step, budget: _export(ti, state, step, milestone_folder(budget)))
 
   def finish(result) -> dict[str, Any]:  # the run's checkpoint, policy and summary, as soon as it ends
-    checkpointer.save(result.state, result.step)
-    policy = _export(ti, result.state, result.step)
-    reporter.close()
-    return {"step": result.step, "reason": result.reason, "policy": policy, **reporter.latest, **reporter.latest_probe}
+    try:
+      return finish_run(ti, result, checkpointer, reporter)
+    finally:
+      reporter.close()
 
-  return Member(checkpointer, reporter, schedule, finish), reporter
+  return Member(checkpointer, reporter, schedule_of(ti, *shared), finish), reporter
 
 
 def prepare_group(plans: list[RunPlan]) -> Training:
@@ -131,11 +119,8 @@ def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOpt
   train.core.session.train)."""
   states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(p.seed) for p in plans]))
   update = compile_group(t, len(plans))
-  ev = make_evaluator(t, plans[0].seed)
-  evaluate = None if ev is None else (
-      lambda state: ev.run_evaluation(to_host(t.learner.policy_params(state)), training_metrics={}))
-  probe = Probe(t) if any(p.probe_every for p in plans) else None
-  parts = [_member(t, p, db, (evaluate, probe), options) for p in plans]
+  shared = (evaluator_of(t), Probe(t) if any(p.probe_every for p in plans) else None)  # compiled once for all
+  parts = [_member(t, p, db, shared, options) for p in plans]
   try:
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop).run(states, 0, plans[0].total_steps)
   finally:

@@ -237,14 +237,13 @@ def _early_stop(given: str | None, preset, cfg) -> EarlyStop | None:
   return parse_early_stop(given, cfg) if given else None
 
 
-PROBE_EPISODE_STEPS = 50  # control steps: the episode length the presets' probe_steps are set for (the stair tasks')
-
-
 def probe_interval(preset_steps: int, cfg: TaskConfig) -> int:
-  """A preset's probe interval (steps) for the task: a probe's trials run its episodes' full length,
-  so the interval grows with it in whole multiples (80-step terrain episodes: 2x; nav's 240: 5x).
+  """A preset's probe interval (steps) for the task: the presets' are for the default episode length
+  (configs/defaults.yaml, the stair tasks' 50 control steps); a probe's trials run its episodes' full
+  length, so the interval grows with it in whole multiples (80-step terrain episodes: 2x; nav's 240: 5x).
   Probing nav every 81,920 steps cost 8x the training in a 5-run study on one H100 (2026-11-25)."""
-  return preset_steps * max(1, -(-cfg.episode.max_steps // PROBE_EPISODE_STEPS))
+  from mjx_tracks.envs.config import default_config  # noqa: PLC0415
+  return preset_steps * max(1, -(-cfg.episode.max_steps // default_config().episode.max_steps))
 
 
 def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int:

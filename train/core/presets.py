@@ -32,7 +32,7 @@ class PPOPreset:
   num_evals: int = 10
   num_eval_envs: int = 256
   training_metrics_steps: int = 500_000
-  probe_steps: int = 81_920  # steps between probes (train.core.probe) for 50-step episodes, longer ones in proportion
+  probe_steps: int = 81_920  # steps between probes (train.core.probe) for the default episode length, longer ones in proportion
   #                             (train.core.plan.probe_interval); 0: none unless asked
   run_evals: bool = True  # brax's evaluation on a separate env (uniform scenes) at each eval point
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=1024",)
@@ -56,7 +56,7 @@ class SACPreset:
   max_replay_size: int = 1_000_000
   hidden: tuple[int, ...] = (256, 256)
   training_metrics_steps: int = 100_000
-  probe_steps: int = 100_000  # steps between probes for 50-step episodes, as PPOPreset's; 0: none unless asked
+  probe_steps: int = 100_000  # steps between probes for the default episode length, as PPOPreset's; 0: none unless asked
   num_evals: int = 10
   num_eval_envs: int = 256
   config_overrides: tuple[str, ...] = ("scene.curriculum.window=256",)

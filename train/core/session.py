@@ -57,7 +57,7 @@ def _restore(t: Training, ckpts: RunCheckpoints) -> tuple[Any, int]:
   return from_host(host, t.shardings), int(meta["step"])  # below the total: plan_run checked the newest
 
 
-def _evaluator(t: Training):
+def evaluator_of(t: Training):
   """evaluate(state) -> Brax evaluation metrics, or None."""
   ev = make_evaluator(t, t.plan.seed)
   if ev is None:
@@ -73,13 +73,27 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) ->
                       os.path.join(plan.out_dir, "tb") if primary else None,
                       stream=sys.stdout if primary else open(os.devnull, "w"),
                       wall_offset=db.wall_offset(plan.run_id, start_step))
-  eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
-  probe = Probe(t) if plan.probe_every else None
-  schedule = Schedule(p.training_metrics_steps, plan.early_stop,
-                      ((_evaluator(t), eval_every), (probe, plan.probe_every)), plan.milestones,
-                      lambda state, step, budget: _export(t, state, step, milestone_folder(budget)))
+  schedule = schedule_of(t, evaluator_of(t), Probe(t) if plan.probe_every else None)
   loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, stop, schedule)
   return loop, reporter
+
+
+def schedule_of(t: Training, evaluate, probe) -> Schedule:
+  """What happens between the run's updates: reports, Brax's evaluator (evaluate), the probe, milestones."""
+  plan, p = t.plan, t.plan.preset
+  eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
+  return Schedule(p.training_metrics_steps, plan.early_stop,
+                  ((evaluate, eval_every), (probe if plan.probe_every else None, plan.probe_every)), plan.milestones,
+                  lambda state, step, budget: _export(t, state, step, milestone_folder(budget)))
+
+
+def checkpointer_of(t: Training, db, options: SessionOptions, last_step: int | None = None) -> Checkpointer:
+  """The run's timed whole-state checkpoints, each recorded in the database."""
+  plan = t.plan
+  ckpts = RunCheckpoints(plan.out_dir, options.keep_checkpoints)
+  meta = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": t.spec.to_json()}
+  return Checkpointer(ckpts, meta, t.learner, lambda s: db.set_checkpoint(plan.run_id, ckpts.dir, s),
+                      options.checkpoint_every_s, last_step=last_step)
 
 
 def _export(t: Training, state, step: int, folder: str = "policy") -> str:
@@ -93,28 +107,23 @@ def _export(t: Training, state, step: int, folder: str = "policy") -> str:
                         "config": plan.cfg.to_dict()}, folder)
 
 
-def _finish(t: Training, result: LoopResult, checkpointer: Checkpointer) -> str:
-  """Checkpoints the final state and exports its policy; returns the policy directory."""
+def finish_run(t: Training, result: LoopResult, checkpointer: Checkpointer, reporter: Reporter) -> dict[str, Any]:
+  """Checkpoints the final state and exports its policy; returns the run's summary."""
   checkpointer.save(result.state, result.step)
-  return _export(t, result.state, result.step)
+  policy_dir = _export(t, result.state, result.step)
+  return {"step": result.step, "reason": result.reason, "policy": policy_dir, **reporter.latest,
+          **reporter.latest_probe}
 
 
 def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions()) -> dict[str, Any]:
   """Trains until the plan's total steps, an early stop or a stop request; returns the summary."""
   t, state, step = prepared.t, prepared.state, prepared.step
-  plan = t.plan
-  ckpts = RunCheckpoints(plan.out_dir, options.keep_checkpoints)
-  meta = {"algo": plan.algo, "task": plan.task, "run_id": plan.run_id, "network": t.spec.to_json()}
-  checkpointer = Checkpointer(ckpts, meta, t.learner, lambda s: db.set_checkpoint(plan.run_id, ckpts.dir, s),
-                              options.checkpoint_every_s, last_step=step if plan.resume else None)
+  checkpointer = checkpointer_of(t, db, options, last_step=step if t.plan.resume else None)
   loop, reporter = _loop(t, db, stop, checkpointer, step)
   try:
-    result = loop.run(state, step, plan.total_steps)
-    policy_dir = _finish(t, result, checkpointer)
+    return finish_run(t, loop.run(state, step, t.plan.total_steps), checkpointer, reporter)
   finally:
     reporter.close()
-  return {"step": result.step, "reason": result.reason, "policy": policy_dir, **reporter.latest,
-          **reporter.latest_probe}
 
 
 def device_summary() -> str:
