@@ -1,6 +1,7 @@
 """A stand-in for `train.run` / `train.evaluate` in study tests (no JAX): `train ARGS` makes a run
 folder with a checkpoint every 100 steps (0.1 s each) and records the run and one statistics row per
-checkpoint in its database; `evaluate RUN --suite --trials N [--milestones]` records N trials per
+checkpoint in its database (with --seeds S,S,..., one folder OUT/s<seed> per seed, side by side; each
+run.json lists its sessions' seeds under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
 scene of fake_success() and writes eval-hardest.json (with --baseline NAME --task TASK, first a run
 record of its own). FAKE_CRASH_SEED: that seed's first session
 exits 1 after its first checkpoint; FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
@@ -25,43 +26,61 @@ def fake_success(task: str, seed: int, budget: int, trial: int) -> int:
   return int(trial % 4 < min(per4, 4))
 
 
-def train(argv: list[str]) -> int:
-  p = argparse.ArgumentParser()
-  for name in ("--task", "--algo", "--preset", "--steps", "--seed", "--out", "--db", "--resume", "--early-stop",
-               "--milestones"):
-    p.add_argument(name)
-  p.add_argument("--set", action="append", default=[])
-  a = p.parse_args(argv)
-  out = a.resume or a.out
+def _begin(a, out: str, seed: str, db: ExperimentDB) -> dict:
+  """A run's record (new, or read to resume), its session counted and its start recorded."""
   meta_path = os.path.join(out, "run.json")
   if a.resume:
     meta = json.load(open(meta_path))
   else:
-    meta = {"run_id": f"{a.task}-s{a.seed}-{time.time_ns()}", "task": a.task, "seed": int(a.seed),
+    meta = {"run_id": f"{a.task}-s{seed}-{time.time_ns()}", "task": a.task, "seed": int(seed),
             "steps": int(a.steps), "total_steps": int(a.steps), "sessions": 0, "milestones": [int(m) for m in (a.milestones or "").split(",") if m]}
   meta["sessions"] += 1
-  db = ExperimentDB(a.db)
+  meta.setdefault("programs", []).append(a.seeds or str(meta["seed"]))  # the seeds each session trained in one process
   db.start(meta["run_id"], meta["task"], "ppo", "cpu", meta["seed"], {}, out, meta["steps"])
+  os.makedirs(os.path.join(out, "checkpoints"), exist_ok=True)
+  json.dump(meta, open(meta_path, "w"))
+  return meta
+
+
+def _step(meta: dict, out: str, db: ExperimentDB) -> bool:
+  """One checkpoint further (if not at the end); False if the run crashes there."""
+  step = max([int(d) for d in os.listdir(os.path.join(out, "checkpoints"))], default=0)
+  if step >= meta["steps"]:
+    return True
+  time.sleep(1.0 if str(meta["seed"]) == os.environ.get("FAKE_SLOW_SEED") else 0.1)
+  step += 100
+  os.makedirs(os.path.join(out, "checkpoints", str(step)))
+  if step in meta["milestones"]:
+    os.makedirs(os.path.join(out, "milestones", str(step)))
+  db.log_stats(meta["run_id"], {"step": step, "wall_s": step / 100, "return_mean": step / 1000 + meta["seed"],
+                                "success_rate": step / 1000, "source": "train"}, {})
+  if step == meta["steps"]:
+    db.finish(meta["run_id"], "done", {}, step)
+  return not (str(meta["seed"]) == os.environ.get("FAKE_CRASH_SEED") and meta["sessions"] == 1)
+
+
+def train(argv: list[str]) -> int:
+  """One run (--seed), or several side by side in OUT/s<seed> (--seeds S,S,...) with one database."""
+  p = argparse.ArgumentParser()
+  for name in ("--task", "--algo", "--preset", "--steps", "--seed", "--seeds", "--out", "--db", "--resume",
+               "--early-stop", "--milestones"):
+    p.add_argument(name)
+  p.add_argument("--set", action="append", default=[])
+  a = p.parse_args(argv)
+  db = ExperimentDB(a.db)
+  runs = [(os.path.join(a.out, f"s{s}"), s) for s in a.seeds.split(",")] if a.seeds else [(a.resume or a.out, a.seed)]
+  metas = [(_begin(a, out, seed, db), out) for out, seed in runs]
 
   def interrupted(*_):
-    db.finish(meta["run_id"], "interrupted", {})
+    for meta, _ in metas:
+      db.finish(meta["run_id"], "interrupted", {})
     sys.exit(143)
 
   signal.signal(signal.SIGTERM, interrupted)
-  os.makedirs(os.path.join(out, "checkpoints"), exist_ok=True)
-  step = max([int(d) for d in os.listdir(os.path.join(out, "checkpoints"))], default=0)
-  json.dump(meta, open(meta_path, "w"))
-  while step < meta["steps"]:
-    time.sleep(1.0 if str(meta["seed"]) == os.environ.get("FAKE_SLOW_SEED") else 0.1)
-    step += 100
-    os.makedirs(os.path.join(out, "checkpoints", str(step)))
-    if step in meta["milestones"]:
-      os.makedirs(os.path.join(out, "milestones", str(step)))
-    db.log_stats(meta["run_id"], {"step": step, "wall_s": step / 100, "return_mean": step / 1000 + meta["seed"],
-                                  "success_rate": step / 1000, "source": "train"}, {})
-    if str(meta["seed"]) == os.environ.get("FAKE_CRASH_SEED") and meta["sessions"] == 1:
-      return 1
-  db.finish(meta["run_id"], "done", {}, step)
+  while any(len(os.listdir(os.path.join(out, "checkpoints"))) < meta["steps"] // 100 for meta, out in metas):
+    for meta, out in metas:
+      if not _step(meta, out, db):
+        return 1
   return 0
 
 

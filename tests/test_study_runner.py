@@ -11,10 +11,12 @@ import signal
 import threading
 import time
 
+import pytest
 import scipy.stats
 from distributed import Client, Nanny
 from fake_study_run import fake_success
 
+from mjx_tracks.envs.config import ConfigError
 from train.db import ExperimentDB
 
 from train.study.cluster import local_cluster
@@ -32,12 +34,12 @@ STUDY = {"name": "t", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], 
 SLOW = "g/asc-inc-cog/400/s0"  # seed 0 runs slowly; its worker is killed during its first attempt
 
 
-def _workers(tmp_path) -> dict:
+def _workers(tmp_path, slow: str = "0") -> dict:
   specs = {}
   for name in ("a", "b"):
     scratch = tmp_path / f"worker-{name}"
     scratch.mkdir()
-    env = {"TMPDIR": str(scratch), "FAKE_SLOW_SEED": "0", "FAKE_CRASH_SEED": "1"}
+    env = {"TMPDIR": str(scratch), "FAKE_SLOW_SEED": slow, "FAKE_CRASH_SEED": "1"}
     specs[name] = {"cls": Nanny, "options": {"nthreads": 1, "resources": {"cpu": 1}, "env": env,
                                               "local_directory": str(scratch)}}
   return specs
@@ -194,16 +196,20 @@ def _cmdline(p) -> list[str]:
     return []
 
 
-def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_nothing_behind(tmp_path):
-  """A scheduler's SIGTERM reaches the study process alone: it forwards it to the runs it started,
-  which save; their folders come back; no run process nor scratch folder is left; exit 143."""
+@pytest.mark.parametrize("packed", [False, True])
+def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_nothing_behind(tmp_path, packed):
+  """A scheduler's SIGTERM reaches the study process alone: it forwards it to the runs it started
+  (one process per run, or one for a pack of seeds), which save; their folders come back; no run
+  process nor scratch folder is left; exit 143."""
   import subprocess
   import sys
 
   import psutil
   scratch, folder = tmp_path / "scratch", str(tmp_path / "study")
   scratch.mkdir()
-  study = {**STUDY, "tasks": ["asc-inc-cog"], "seeds": [0], "compare": [], "baselines": []}
+  seeds, prefix = ([0, 1], "study-pack-*") if packed else ([0], "study-cell-*")
+  study = {**STUDY, "tasks": ["asc-inc-cog"], "seeds": seeds, "compare": [], "baselines": [],
+           "groups": [{**STUDY["groups"][0], "pack_seeds": packed}]}
   proc = subprocess.Popen([sys.executable, "-c", _STUDY_MAIN, json.dumps([study, folder, str(scratch), COMMANDS])],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
   t_end, runs = time.time() + 120, []
@@ -211,17 +217,56 @@ def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_not
     assert time.time() < t_end and proc.poll() is None, proc.stdout.read() if proc.poll() is not None else ""
     runs = [p for p in psutil.Process(proc.pid).children(recursive=True) if FAKE in " ".join(_cmdline(p))]
     time.sleep(0.2)
-  while not list(scratch.glob("study-cell-*/**/checkpoints/*")):  # a checkpoint (the run has started up)
+  while len({c.parent for c in scratch.glob(f"{prefix}/**/checkpoints/*")}) < len(seeds):  # a checkpoint of each run
     assert time.time() < t_end and proc.poll() is None, "no checkpoint in time"
     time.sleep(0.2)
   proc.send_signal(signal.SIGTERM)
   assert proc.wait(90) == 143, proc.stdout.read()
   assert not [p for p in runs if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
-  (record,) = json.load(open(os.path.join(folder, "state.json")))["cells"].values()
-  assert record["status"] == "queued" and record["attempts"][-1]["stopped"] and record["attempts"][-1]["rc"] == 143
-  (cell,) = cells(study_from_dict(study))
-  assert os.listdir(os.path.join(cell_folder(folder, cell), "checkpoints"))  # came back: the next start resumes
-  assert not list(scratch.glob("study-cell-*"))
+  assert len(runs) == 1  # a pack is one process
+  records = json.load(open(os.path.join(folder, "state.json")))["cells"]
+  for cell in cells(study_from_dict(study)):
+    record = records[cell.id]
+    assert record["status"] == "queued" and record["attempts"][-1]["stopped"] and record["attempts"][-1]["rc"] == 143
+    assert os.listdir(os.path.join(cell_folder(folder, cell), "checkpoints"))  # came back: the next start resumes
+  assert not list(scratch.glob(prefix))
+
+
+def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):
+  """pack_seeds: a group's fresh runs that differ only in their seed are one train.run --seeds
+  process per task (both tasks' packs at once, one slot each); each run's folder, records and
+  evaluation come back as a single run's; when the pack crashes (seed 1 does, in its first
+  session), each run is retried alone, from its own checkpoints where it saved one."""
+  study = {**STUDY, "seeds": [0, 1, 2], "baselines": [], "groups": [{**STUDY["groups"][0], "pack_seeds": True}]}
+  spec, folder = study_from_dict(study), str(tmp_path / "study")
+  with local_cluster(_workers(tmp_path, slow="")) as cluster, Client(cluster) as client:
+    counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=io.StringIO()).run()
+  assert counts == {"done": 6, "running": 0, "queued": 0, "failed": 0}
+  state = json.load(open(os.path.join(folder, "state.json")))["cells"]
+  db = ExperimentDB(os.path.join(folder, STUDY_DB))
+  for c in cells(spec):
+    first, second = state[c.id]["attempts"]
+    pack = [f"g/{c.task}/400/s{s}" for s in (0, 1, 2)]
+    assert first["pack"] == pack and first["rc"] == 1 and first["phase"] == "train"
+    saved = c.seed < 2  # seeds 0 and 1 had saved a checkpoint when seed 1 crashed the pack; seed 2 had not
+    assert "pack" not in second and second["resumed"] == saved and second["rc"] == 0 and second["phase"] == "evaluate"
+    run = cell_folder(folder, c)
+    meta = json.load(open(os.path.join(run, "run.json")))
+    assert meta["seed"] == c.seed and meta["programs"] == ["0,1,2"] * saved + [str(c.seed)]
+    own = ExperimentDB(os.path.join(run, "run.sqlite")).runs()
+    assert [r["run_id"] for r in own] == [meta["run_id"]]  # its own rows only, as a single run's
+    trials = [e for e in db.evals(meta["run_id"]) if e["scene"] == "hardest" and e["budget"] is None]
+    assert sum(e["success"] for e in trials) == sum(fake_success(c.task, c.seed, 400, i) for i in range(4))
+    assert os.path.isdir(os.path.join(run, "checkpoints", "400")) and os.path.isdir(os.path.join(run, "milestones", "200"))
+  starts = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["started"] for t in spec.tasks)
+  ends = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["ended"] for t in spec.tasks)
+  assert starts[1] < ends[0]  # the two packs ran at once
+
+
+def test_seeds_are_packed_only_for_this_projects_trainer():
+  bad = {**STUDY, "groups": [{**STUDY["groups"][0], "budgets": "runs", "library": "sb3", "pack_seeds": True}]}
+  with pytest.raises(ConfigError, match=r"groups\[0\]\.pack_seeds"):
+    study_from_dict(bad)
 
 
 def test_status_says_submitted_not_running_for_runs_handed_to_the_cluster(tmp_path):

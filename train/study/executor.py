@@ -19,8 +19,8 @@ from mjx_tracks import atomic
 from train.db import ExperimentDB
 from train.core.plan import DEFAULT_LIBRARY
 from train.core.run_record import read_run_record, run_id_in
-from train.study.spec import Cell, StudySpec, cells
-from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, unpack
+from train.study.spec import Cell, StudySpec, cells, packs_of
+from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, run_pack, unpack
 
 STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
 STATE = "state.json"  # every cell's status and attempts
@@ -136,12 +136,14 @@ class StudyRunner:
     self.backends = backends
     self.cells = {c.id: c for c in cells(spec)}
     self.submitted: list = []  # every attempt's future, in order
+    self.owners: dict[str, list[str]] = {}  # an attempt's key -> the cells it runs (several: a pack)
     os.makedirs(os.path.join(folder, "runs"), exist_ok=True)
     from train.study.results import write_spec  # noqa: PLC0415  (results imports this module)
     write_spec(folder, spec)
     self.state = StudyState.load(folder, list(self.cells))
 
-  def _submit(self, cid: str):
+  def _begin(self, cid: str) -> tuple[bytes | None, bool]:
+    """Records a new attempt of a cell; (its run folder packed if it resumes, whether it trains)."""
     cell, record = self.cells[cid], self.state.cells[cid]
     local = cell_folder(self.folder, cell)
     ended = [a for a in record["attempts"] if a.get("phase")]  # not those the study's own stop cut off
@@ -149,20 +151,59 @@ class StudyRunner:
     resume = pack(local) if has_run else None
     record["status"] = "running"
     record["attempts"].append({"started": time.time(), "resumed": resume is not None, "train": train})
-    eval_args = cell.eval_args(self.spec.eval_trials)
-    backend = cell.backend if cell.backend in self.backends else self.backends[0]
-    return self.client.submit(run_cell, cell.train_args(), eval_args, resume, train, self.commands,
-                              key=f"{cid}/attempt-{len(record['attempts'])}", pure=False, resources={backend: 1})
+    return resume, train
 
-  def _settle(self, cid: str, future, stopped: bool = False) -> bool:
-    """Records an attempt's outcome (stopped: by the study's own stop, not counted as a failure);
-    True if the cell should be tried again."""
-    record = self.state.cells[cid]
-    attempt = record["attempts"][-1]
+  def _resources(self, cell: Cell) -> dict:
+    return {cell.backend if cell.backend in self.backends else self.backends[0]: 1}
+
+  def _submit(self, cid: str):
+    cell = self.cells[cid]
+    resume, train = self._begin(cid)
+    key = f"{cid}/attempt-{len(self.state.cells[cid]['attempts'])}"
+    future = self.client.submit(run_cell, cell.train_args(), cell.eval_args(self.spec.eval_trials), resume, train,
+                                self.commands, key=key, pure=False, resources=self._resources(cell))
+    self.owners[key] = [cid]
+    return future
+
+  def _submit_pack(self, cids: list[str]):
+    """Fresh cells that differ only in their seed, trained as one program (train.run --seeds)."""
+    cells = [self.cells[cid] for cid in cids]
+    for cid in cids:
+      self._begin(cid)
+      self.state.cells[cid]["attempts"][-1]["pack"] = cids
+    key = f"{cids[0]}/attempt-{len(self.state.cells[cids[0]]['attempts'])}+{len(cids) - 1}"
+    future = self.client.submit(run_pack, cells[0].pack_args([c.seed for c in cells]),
+                                [c.seed for c in cells], cells[0].eval_args(self.spec.eval_trials), self.commands,
+                                key=key, pure=False, resources=self._resources(cells[0]))
+    self.owners[key] = cids
+    return future
+
+  def _submit_all(self, cids: list[str]) -> list:
+    """Submits the cells: fresh cells of a group that packs seeds go as one pack per set of seeds."""
+    fresh = [self.cells[cid] for cid in cids
+             if not self.state.cells[cid]["attempts"] and not os.path.exists(cell_folder(self.folder, self.cells[cid]))]
+    packs = [[c.id for c in p] for p in packs_of(fresh)]
+    packed = {cid for p in packs for cid in p}
+    return [self._submit_pack(p) for p in packs] + [self._submit(cid) for cid in cids if cid not in packed]
+
+  def _results(self, future) -> dict[str, dict]:
+    """Each cell's result of an attempt (a pack's, one per cell); a task that raised, or whose worker
+    died (distributed.KilledWorker), gives every cell of it that error."""
+    cids = self.owners[future.key]
     try:
       res = future.result()
-    except Exception as e:  # the task raised, or its worker died (distributed.KilledWorker)
-      res = {"rc": None, "phase": "train", "tar": None, "log_tail": "", "worker": None, "error": repr(e)}
+    except Exception as e:
+      failed = {"rc": None, "phase": "train", "tar": None, "log_tail": "", "worker": None, "error": repr(e)}
+      return {cid: failed for cid in cids}
+    if "cells" not in res:
+      return {cids[0]: res}
+    return {cid: res["cells"][self.cells[cid].seed] for cid in cids}
+
+  def _settle(self, cid: str, res: dict, stopped: bool = False) -> bool:
+    """Records an attempt's outcome (res: _results'; stopped: by the study's own stop, not counted
+    as a failure); True if the cell should be tried again."""
+    record = self.state.cells[cid]
+    attempt = record["attempts"][-1]
     db, local = ExperimentDB(os.path.join(self.folder, STUDY_DB)), cell_folder(self.folder, self.cells[cid])
     if res["tar"] is not None:
       shutil.rmtree(local, ignore_errors=True)
@@ -182,9 +223,9 @@ class StudyRunner:
     return retry
 
   def _running(self) -> int | None:
-    """How many of the cluster's tasks are running now (None if the scheduler cannot say)."""
+    """How many cells the cluster's tasks are running now (a pack's all; None if the scheduler cannot say)."""
     try:
-      return sum(len(keys) for keys in self.client.processing().values())
+      return sum(len(self.owners.get(key, [key])) for keys in self.client.processing().values() for key in keys)
     except Exception:  # noqa: BLE001  (a scheduler going away must not stop the study)
       return None
 
@@ -197,9 +238,9 @@ class StudyRunner:
     t0, finished = time.time(), 0
     todo = [cid for cid, c in self.state.cells.items() if c["status"] != "done"]
     pending, submitted = as_completed(), self.submitted
-    for cid in todo:
-      submitted.append(self._submit(cid))
-      pending.add(submitted[-1])
+    for future in self._submit_all(todo):
+      submitted.append(future)
+      pending.add(future)
     self.state.save()
     self._report(t0, finished)
     last = time.time()
@@ -215,12 +256,12 @@ class StudyRunner:
         time.sleep(0.2)
         continue
       for future in batch:
-        cid = _cell_of(future)
-        if self._settle(cid, future):
-          submitted.append(self._submit(cid))
-          pending.add(submitted[-1])
-        else:
-          finished += 1
+        for cid, res in self._results(future).items():
+          if self._settle(cid, res):  # a pack's cells are tried again one by one, from their folders
+            submitted.append(self._submit(cid))
+            pending.add(submitted[-1])
+          else:
+            finished += 1
         self.state.save()
       self._report(t0, finished)
       last = time.time()
@@ -239,25 +280,23 @@ class StudyRunner:
         pass
     psutil.wait_procs(procs, timeout=timeout_s)
     back, t_end = 0, time.time() + 30  # the workers pack each run folder and return it
-    latest = {_cell_of(f): f for f in self.submitted}  # each cell's last attempt
-    for cid, future in latest.items():
-      if self.state.cells[cid]["status"] != "running":
+    latest = {cid: f for f in self.submitted for cid in self.owners[f.key]}  # each cell's last attempt
+    for future in dict.fromkeys(latest.values()):
+      cids = [cid for cid, f in latest.items() if f is future and self.state.cells[cid]["status"] == "running"]
+      if not cids:
         continue  # settled already
       try:
         future.result(timeout=max(t_end - time.time(), 0.1))
       except Exception:  # noqa: BLE001  (not back in time, or lost: the next start records it as stopped)
         pass
       if future.done():
-        self._settle(cid, future, stopped=True)
-        back += 1
+        results = self._results(future)
+        for cid in cids:
+          self._settle(cid, results[cid], stopped=True)
+          back += 1
     self.client.cancel([f for f in self.submitted if not f.done()])
     self.state.save()
     return back
-
-
-def _cell_of(future) -> str:
-  """The cell id of an attempt's future (its key is CELL/attempt-N)."""
-  return future.key.rsplit("/attempt-", 1)[0]
 
 
 def run_processes(commands) -> list:

@@ -18,7 +18,8 @@ from train.core.presets import SB3, get_preset, with_hyperparams
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES),
                   "robustness": False}
-GROUP_DEFAULTS = {"preset": "gpu", "library": DEFAULT_LIBRARY, "early_stop": "", "set": [], "hp": [], "backend": "gpu", "budgets": "runs", "tasks": []}
+GROUP_DEFAULTS = {"preset": "gpu", "library": DEFAULT_LIBRARY, "early_stop": "", "set": [], "hp": [], "backend": "gpu", "budgets": "runs", "tasks": [],
+                  "pack_seeds": False}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
 
@@ -37,6 +38,7 @@ class GroupSpec:
   backend: str  # gpu | cpu: the workers that run its cells (cpu: e.g. one-robot runs)
   budgets: str  # BUDGETS: runs | milestones
   tasks: tuple[str, ...]  # the study's tasks this group trains; empty: all of them
+  pack_seeds: bool  # a run's seeds start as one program (train.run --seeds), one worker slot for all
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,6 +70,7 @@ class Cell:
   hp: tuple[str, ...] = ()  # train.run --hp KEY=VALUE
   library: str = DEFAULT_LIBRARY  # train.run --library
   robustness: bool = False  # its evaluation adds the robustness suite
+  pack_seeds: bool = False  # its first attempt trains beside the other seeds of its pack in one program
 
   @property
   def id(self) -> str:
@@ -98,6 +101,17 @@ class Cell:
       args += ["--milestones", ",".join(map(str, self.milestones))]
     return args + ["--early-stop", self.early_stop or NO_EARLY_STOP]  # the group's, not the preset's
 
+  def pack_args(self, seeds: list[int]) -> list[str]:
+    """`python -m train.run` arguments of this cell's pack: its own, with --seeds S,S,... for --seed."""
+    args = self.train_args()
+    i = args.index("--seed")
+    return [*args[:i], "--seeds", ",".join(map(str, seeds)), *args[i + 2:]]
+
+  @property
+  def pack_key(self) -> "Cell":
+    """What the cells of one pack share: everything but the seed."""
+    return dataclasses.replace(self, seed=0)
+
   def budgets(self) -> tuple[int, ...]:
     """The step budgets this run's evaluations stand for."""
     return (*self.milestones, self.steps)
@@ -125,6 +139,8 @@ def _group(raw, i: int) -> GroupSpec:
   require(len(g.hp) <= MAX_OVERRIDES, f"{key}.hp", f"at most {MAX_OVERRIDES} hyper-parameters")
   require(g.backend in BACKENDS, f"{key}.backend", lambda: f"one of {BACKENDS}, got {show(g.backend)}")
   require(g.budgets in BUDGETS, f"{key}.budgets", lambda: f"one of {BUDGETS}, got {show(g.budgets)}")
+  require(not g.pack_seeds or g.library == DEFAULT_LIBRARY, f"{key}.pack_seeds",
+          f"packs seeds into one program of this project's trainer; {g.library} trains one run per process")
   require(g.budgets == "runs" or not g.early_stop, f"{key}.budgets",
           "milestones stand for smaller budgets of one run; an early stop would cut them short")
   return g
@@ -217,11 +233,21 @@ def runs_of(g: GroupSpec) -> list[tuple[int, tuple[int, ...]]]:
 BASELINE_GROUP = "baseline-"  # + the baseline's name: the group of its cells
 
 
+def packs_of(fresh: list[Cell]) -> list[list[Cell]]:
+  """The packs of seeds among cells with nothing trained yet: those of a pack_seeds group that differ
+  only in their seed (two or more), in order."""
+  packs: dict[Cell, list[Cell]] = {}
+  for c in fresh:
+    if c.pack_seeds and not c.is_baseline:
+      packs.setdefault(c.pack_key, []).append(c)
+  return [p for p in packs.values() if len(p) > 1]
+
+
 def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order; then one evaluation of each
   baseline on each task it can drive (its trials vary by themselves; seed: the study's first)."""
   trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones, g.hp,
-                  g.library, spec.robustness)
+                  g.library, spec.robustness, g.pack_seeds)
              for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g)
              for seed in spec.seeds]
   return trained + [Cell(BASELINE_GROUP + name, task, 0, spec.seeds[0], BASELINE_ALGO, name, "", (), "gpu",

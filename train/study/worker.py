@@ -15,6 +15,8 @@ import tarfile
 import tempfile
 
 from mjx_tracks import atomic
+from train.core.run_record import run_id_in
+from train.db import ExperimentDB
 
 # what a worker runs, after its own Python (sys.executable there: workers may be other machines)
 TRAIN = ("-m", "train.run")
@@ -96,6 +98,54 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
     return {"rc": rc, "phase": phase, "tar": pack(out), "log_tail": output[-2000:], "worker": _worker_name()}
   finally:
     shutil.rmtree(scratch, ignore_errors=True)
+
+
+def run_pack(pack_args: list[str], seeds: list[int], eval_args: list[str],
+             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
+  """First attempts of cells that differ only in their seed, as one program (`train.run --seeds`);
+  then each run's evaluation, side by side. {"cells": {seed: run_cell's result}}: each run's folder
+  (OUT/s<seed>) comes back with its own records (run.sqlite) and the pack's training output."""
+  scratch = tempfile.mkdtemp(prefix="study-pack-")
+  out, shared_db, log = (os.path.join(scratch, name) for name in ("pack", "pack.sqlite", "train.log"))
+  try:
+    rc = _call([sys.executable, *commands[0], *pack_args, "--out", out, "--db", shared_db], log, None, "train")
+    folders = {s: os.path.join(out, f"s{s}") for s in seeds}
+    for folder in folders.values():  # each run's rows in a database of its own, as a single run's
+      if os.path.isdir(folder) and os.path.exists(shared_db):
+        ExperimentDB(os.path.join(folder, RUN_DB)).import_runs(shared_db, only=[run_id_in(folder)])
+    evaluated = _evaluate_side_by_side(folders, eval_args, commands[1], scratch) if rc == 0 and eval_args else {}
+    trained = open(log).read() if os.path.exists(log) else ""
+    return {"cells": {s: _pack_result(folders[s], trained, *evaluated.get(s, ("train", rc, ""))) for s in seeds}}
+  finally:
+    shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _evaluate_side_by_side(folders: dict[int, str], eval_args: list[str], command: tuple[str, ...],
+                           scratch: str) -> dict[int, tuple[str, int, str]]:
+  """Evaluates every run folder at once (one process each; on a GPU none preallocates memory);
+  {seed: ("evaluate", exit code, output)}."""
+  env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}
+  procs = {}
+  for s, folder in folders.items():
+    log = open(os.path.join(scratch, f"evaluate-s{s}.log"), "w")
+    argv = [sys.executable, *command, folder, *eval_args, "--db", os.path.join(folder, RUN_DB)]
+    procs[s] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log)
+  done = {}
+  for s, (proc, log) in procs.items():
+    rc = proc.wait()
+    log.close()
+    done[s] = ("evaluate", rc, open(log.name).read())
+  return done
+
+
+def _pack_result(folder: str, trained: str, phase: str, rc: int, evaluated: str) -> dict:
+  """run_cell's result of one run of a pack."""
+  output = trained + evaluated
+  if not os.path.isdir(folder):
+    return {"rc": rc or 1, "phase": phase, "tar": None, "log_tail": output[-2000:], "worker": _worker_name()}
+  with open(os.path.join(folder, "study-attempts.log"), "a") as f:
+    f.write(output)
+  return {"rc": rc, "phase": phase, "tar": pack(folder), "log_tail": output[-2000:], "worker": _worker_name()}
 
 
 def run_in_place(run_args: list[str], eval_args: list[str], out: str, db: str, resume: bool, train: bool = True,
