@@ -12,7 +12,7 @@ import pytest
 from helpers import TRAIN_TINY
 
 from train import db as dbmod
-from train import run
+from train import evaluate, run
 from train.core.checkpoints import RunCheckpoints
 from train.core.early_stop import EarlyStop
 from train.core.group_loop import GroupLoop, Member
@@ -69,7 +69,7 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
   d = dbmod.ExperimentDB(database)
   runs = {r["seed"]: r for r in d.runs()}
   assert set(runs) == {0, 1} and all(r["status"] == "done" for r in runs.values())
-  params = []
+  params, probes = [], []
   for seed in (0, 1):
     folder = os.path.join(out, f"s{seed}")
     record = json.load(open(os.path.join(folder, "run.json")))
@@ -78,6 +78,16 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
     sources = {(r["source"], r["step"]) for r in d.stats(record["run_id"])}
     assert ("train", 1024) in sources and ("probe", 512) in sources and ("probe", 1024) in sources
     params.append(RunCheckpoints(folder).restore()[0])
+    # the program's probe (every run's trials in one rollout) reads what `train.evaluate` of the run's
+    # policy reads on the same trials: each run's own, not its neighbour's
+    report = str(tmp_path / f"eval-s{seed}.json")
+    assert evaluate.main([folder, "--scene", "hardest", "--out", report, "--db", database]) == 0
+    alone = json.load(open(report))["metrics"]
+    (probe,) = [r for r in d.stats(record["run_id"]) if (r["source"], r["step"]) == ("probe", 1024)]
+    assert probe["success_rate"] == alone["success"]["mean"]
+    assert probe["progress_mean"] == pytest.approx(alone["progress"]["mean"], abs=1e-5)
+    probes.append(probe["progress_mean"])
+  assert probes[0] != probes[1]
   leaves = [jax.tree_util.tree_leaves(p) for p in params]
   assert any(np.asarray(a).shape == np.asarray(b).shape and not np.array_equal(a, b)
              for a, b in zip(*leaves))  # two seeds, two runs

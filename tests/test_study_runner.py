@@ -86,6 +86,7 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
     assert progress[-1].startswith("[study] t: 6 done, 0 running, 0 waiting, 0 to retry, 0 failed")
     assert len(progress) > 1 + sum(len(c["attempts"]) for c in state.values())  # lines while runs ran, too
     assert any(" 1 running" in line or " 2 running" in line for line in progress)
+    assert all(int(line.split(" done, ")[1].split(" running")[0]) <= 2 for line in progress)  # 2 slots: no more run
     lines = summary(folder, runs=True)
     attempts, retried = sum(len(c["attempts"]) for c in state.values()), sum(len(c["attempts"]) > 1 for c in state.values())
     assert lines[0] == (f"study study: 6 runs: 6 done, 0 failed, 0 not finished (0 submitted: running or waiting for "

@@ -187,6 +187,24 @@ def trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps
   return run
 
 
+def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps: float, seed: int):
+  """run(params with a leading run axis) -> [per-trial figures of each run]: trial_runner's trials
+  on `scene` for several policies of one network in one program (the rollout vmapped over the
+  policies: the runs of one `train.run --seeds` program probed at once)."""
+  import jax  # noqa: PLC0415
+  keys = trial_keys(trials, seed)
+  ((cfg, draws),) = scene_programs(cfg0, [scene])
+  _, rollout = trial_rollout(cfg, make_act, trials, eps)
+  compiled = jax.jit(jax.vmap(lambda params, draw: rollout(params, keys, None, draw)[0], in_axes=(0, None)))
+
+  def run(params) -> list[dict]:
+    acc = compiled(params, draws[scene])
+    runs = len(acc["length"])
+    return [per_trial_figures({k: v[i] for k, v in acc.items()}) for i in range(runs)]
+
+  return run
+
+
 def robustness_runner(cfg0: TaskConfig, bases: list[str], make_act, trials: int, eps: float, seed: int,
                       observe=lambda s: s.obs):
   """run(params, base) -> {case: per-trial figures}: every case of the robustness suite on scene

@@ -3,7 +3,8 @@
 # SLOTS_PER_GPU each; one-robot SAC runs on CPU_SLOTS CPU slots). The first call on a machine starts the study in its
 # own process session (setsid), so it keeps running between calls that follow each other while the
 # machine stays warm; every call then waits WAIT seconds (or until the study ends), packing the
-# study folder (without checkpoints), its log and the logs of the attempts still running into
+# study folder (without checkpoints), its log and the logs of the attempts still running (a pack of
+# seeds: its training and evaluation logs) into
 # $OUT/$STUDY-study.tgz every 30 s and at the end. Afterwards, anywhere:
 # `python -m train.study report $STUDY --root DIR`.
 # FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
@@ -53,13 +54,17 @@ start() {
 
 pack() {
   cp "$log" "$root/$study/study.log" 2>/dev/null
-  (cd /tmp && tar czf "$OUT/$study-study.tgz.tmp" --exclude=checkpoints "studies/$study" study-cell-*/attempt.log 2>/dev/null)
+  (cd /tmp && tar czf "$OUT/$study-study.tgz.tmp" --exclude=checkpoints "studies/$study" study-cell-*/attempt.log \
+     study-pack-*/*.log 2>/dev/null)
   mv "$OUT/$study-study.tgz.tmp" "$OUT/$study-study.tgz"
 }
 
 if running; then echo "the study is running (pid $(cat "$pidfile")); waiting ${WAIT:-560} s"; else start; fi
 end=$((SECONDS + ${WAIT:-560}))
-while [ $SECONDS -lt $end ] && running; do sleep 30; pack; grep "\[study\]" "$log" | tail -1; done
+while [ $SECONDS -lt $end ] && running; do
+  sleep 30; pack; grep "\[study\]" "$log" | tail -1
+  for f in /tmp/study-pack-*/train.log; do [ -f "$f" ] && grep -a "\[probe\]" "$f" | tail -1; done  # packs: one log per program
+done
 tail -5 "$log"
 python3 -m train.study status "$study" --root "$root" --runs 2>&1 | tee "$root/$study/status.txt" | tail -70
 pack

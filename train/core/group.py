@@ -3,7 +3,8 @@ only in their seed train as one vmapped update on one device. Each run keeps eve
 its own has: its folder (run.json, checkpoints/, policy/, tb/), its database rows, its probe and
 early stop (a finished run is checkpointed and exported at once, its slot computed and
 discarded from then on), its milestones; `python -m train.run --resume
-RUN` continues any of them alone. The probe and Brax's evaluator are compiled once for all."""
+RUN` continues any of them alone. Brax's evaluator is compiled once for all; the probe runs every
+run's trials in one rollout (train.core.probe.GroupProbe)."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ import jax.numpy as jnp
 from train.core.build import Training, build
 from train.core.group_loop import GroupLoop, Member
 from train.core.plan import RunError, RunPlan
-from train.core.probe import Probe
+from train.core.probe import GroupProbe
 from train.core.progress import Reporter
 from train.core.session import SessionOptions, checkpointer_of, evaluator_of, finish_run, schedule_of
 
@@ -92,7 +93,7 @@ def compile_group(t: Training, n: int, stream=None):
 
 
 def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions) -> tuple[Member, Reporter]:
-  """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of every run."""
+  """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of this run."""
   ti = dataclasses.replace(t, plan=plan)
   checkpointer = checkpointer_of(ti, db, options)
   reporter = Reporter(plan.total_steps, 0, db, plan.run_id, f"{plan.out_dir}/tb", stream=Prefixed(f"s{plan.seed} "))
@@ -119,10 +120,12 @@ def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOpt
   train.core.session.train)."""
   states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(p.seed) for p in plans]))
   update = compile_group(t, len(plans))
-  shared = (evaluator_of(t), Probe(t) if any(p.probe_every for p in plans) else None)  # compiled once for all
-  parts = [_member(t, p, db, shared, options) for p in plans]
+  evaluate = evaluator_of(t)  # compiled once for all
+  probe = GroupProbe(t) if any(p.probe_every for p in plans) else None  # every run's at once
+  parts = [_member(t, p, db, (evaluate, probe and probe.member(i)), options) for i, p in enumerate(plans)]
   try:
-    return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop).run(states, 0, plans[0].total_steps)
+    return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
+                     probe.at if probe else lambda states, step: None).run(states, 0, plans[0].total_steps)
   finally:
     for _, reporter in parts:
       reporter.close()

@@ -33,10 +33,13 @@ def run_slice(states, i: int):
 class GroupLoop:
   """Runs the updates of several runs from a step until a total; see `run`."""
 
-  def __init__(self, update, steps_per_update: int, members: list[Member], stop):
+  def __init__(self, update, steps_per_update: int, members: list[Member], stop,
+               after_update: Callable[[Any, int], None] = lambda states, step: None):
     """update(states) -> (states, metrics), both with a leading run axis; stop.requested: not None
-    once a stop was asked for."""
+    once a stop was asked for; after_update(states, step): told the states after each update,
+    before any run's schedule (e.g. a probe of every run at once: train.core.probe.GroupProbe)."""
     self.update, self.spu, self.members, self.stop = update, steps_per_update, members, stop
+    self.after_update = after_update
 
   def run(self, states, step: int, total: int) -> list[Any]:
     """Updates until `total` steps, every run's early stop or a stop request; each run is finished
@@ -63,6 +66,7 @@ class GroupLoop:
           clock.paused(self.members[i].checkpointer.save, run_slice(states, i), step)
       states, metrics = self.update(states)
       step += self.spu
+      self.after_update(states, step)
       for i in active:
         if tracks[i].after_update(lambda i=i: run_slice(states, i), step, metrics, total) == "early_stop":
           end(i, "early_stop")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from mjx_tracks.metrics import REPORT_COLUMN as COLUMNS  # per-trial figure -> report column
-from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, trial_runner
+from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, group_trial_runner, trial_runner
 from train.core.mesh import to_host
 from train.core.policy import act_from_params
 
@@ -26,4 +26,34 @@ class Probe:
 
   def __call__(self, state) -> dict[str, float]:
     fig, _, _ = self._run(to_host(self._params(state)), self._scene)
-    return {PREFIX + column: float(np.mean(fig[name])) for name, column in COLUMNS.items()}
+    return means(fig)
+
+
+def means(fig: dict) -> dict[str, float]:
+  """{probe/<column>: mean over the trials} of per-trial figures."""
+  return {PREFIX + column: float(np.mean(fig[name])) for name, column in COLUMNS.items()}
+
+
+class GroupProbe:
+  """The probe of every run of one program (train.run --seeds) in one rollout: the same trials,
+  vmapped over the runs' policies, so probing n runs costs about one run's probe, not n. The
+  program's loop names its states after each update (`at`); `member(i)` is run i's probe, the
+  first of which to be asked at a step probes every run."""
+
+  def __init__(self, t, trials: int = EVAL_TRIALS):
+    self._params = t.learner.policy_params
+    self._run = group_trial_runner(t.plan.cfg, t.plan.cfg.scene.probe_scene, act_from_params(t.spec), trials,
+                                   EVAL_EPS, EVAL_SEED)
+    self._states, self._step, self._figures = None, None, {}
+
+  def at(self, states, step: int) -> None:
+    """The program's states (a leading run axis) after the update that reached `step`."""
+    self._states, self._step = states, step
+
+  def member(self, i: int):
+    """probe(state) -> run i's metrics at the current step (its state is the program's slice i)."""
+    def probe(_state) -> dict[str, float]:
+      if self._step not in self._figures:
+        self._figures = {self._step: self._run(to_host(self._params(self._states)))}
+      return means(self._figures[self._step][i])
+    return probe

@@ -223,11 +223,15 @@ class StudyRunner:
     return retry
 
   def _running(self) -> int | None:
-    """How many cells the cluster's tasks are running now (a pack's all; None if the scheduler cannot say)."""
-    try:
-      return sum(len(self.owners.get(key, [key])) for keys in self.client.processing().values() for key in keys)
+    """How many cells are running now, as the workers' heartbeats report their executing tasks (a
+    pack's cells all; a task handed to a worker but waiting there for a slot is not running); None
+    if the scheduler cannot say."""
+    try:  # a lambda travels by value: a remote scheduler needs no import of this project
+      keys = self.client.run_on_scheduler(
+          lambda dask_scheduler: [ts.key for ws in dask_scheduler.workers.values() for ts in ws.executing])
     except Exception:  # noqa: BLE001  (a scheduler going away must not stop the study)
       return None
+    return sum(len(self.owners.get(key, [key])) for key in keys)
 
   def _report(self, t0: float, finished: int) -> None:
     _progress(self.spec.name, self.state, t0, finished, self._running(), self.stream)
