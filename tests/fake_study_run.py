@@ -4,7 +4,8 @@ checkpoint in its database (with --seeds S,S,..., one folder OUT/s<seed> per see
 run.json lists its sessions' seeds under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
 scene of fake_success() and writes eval-hardest.json (with --baseline NAME --task TASK, first a run
 record of its own). FAKE_CRASH_SEED: that seed's first session
-exits 1 after its first checkpoint; FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
+exits 1 after its checkpoint at FAKE_CRASH_STEP (default 100); FAKE_EARLY_SEED: that seed's run stops
+early at step 200 (status stopped_early); FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
 kill its worker); SIGTERM ends a session like train.run's: run 'interrupted', exit 143."""
 
 import argparse
@@ -42,10 +43,13 @@ def _begin(a, out: str, seed: str, db: ExperimentDB) -> dict:
   return meta
 
 
+EARLY_STEP = 200  # where FAKE_EARLY_SEED's run stops early
+
+
 def _step(meta: dict, out: str, db: ExperimentDB) -> bool:
-  """One checkpoint further (if not at the end); False if the run crashes there."""
+  """One checkpoint further (if its run goes on); False if the run crashes there."""
   step = max([int(d) for d in os.listdir(os.path.join(out, "checkpoints"))], default=0)
-  if step >= meta["steps"]:
+  if not _goes_on(meta, step):
     return True
   time.sleep(1.0 if str(meta["seed"]) == os.environ.get("FAKE_SLOW_SEED") else 0.1)
   step += 100
@@ -54,9 +58,16 @@ def _step(meta: dict, out: str, db: ExperimentDB) -> bool:
     os.makedirs(os.path.join(out, "milestones", str(step)))
   db.log_stats(meta["run_id"], {"step": step, "wall_s": step / 100, "return_mean": step / 1000 + meta["seed"],
                                 "success_rate": step / 1000, "source": "train"}, {})
-  if step == meta["steps"]:
-    db.finish(meta["run_id"], "done", {}, step)
-  return not (str(meta["seed"]) == os.environ.get("FAKE_CRASH_SEED") and meta["sessions"] == 1)
+  if not _goes_on(meta, step):
+    db.finish(meta["run_id"], "done" if step >= meta["steps"] else "stopped_early", {}, step)
+  crash_step = int(os.environ.get("FAKE_CRASH_STEP", "100"))
+  return not (str(meta["seed"]) == os.environ.get("FAKE_CRASH_SEED") and meta["sessions"] == 1 and step >= crash_step)
+
+
+def _goes_on(meta: dict, step: int) -> bool:
+  """Whether a run at `step` trains further: not at its total steps nor at its early stop."""
+  early = str(meta["seed"]) == os.environ.get("FAKE_EARLY_SEED") and step >= EARLY_STEP
+  return step < meta["steps"] and not early
 
 
 def train(argv: list[str]) -> int:
@@ -77,7 +88,7 @@ def train(argv: list[str]) -> int:
     sys.exit(143)
 
   signal.signal(signal.SIGTERM, interrupted)
-  while any(len(os.listdir(os.path.join(out, "checkpoints"))) < meta["steps"] // 100 for meta, out in metas):
+  while any(_goes_on(meta, 100 * len(os.listdir(os.path.join(out, "checkpoints")))) for meta, out in metas):
     for meta, out in metas:
       if not _step(meta, out, db):
         return 1

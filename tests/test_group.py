@@ -84,8 +84,9 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
     assert evaluate.main([folder, "--scene", "hardest", "--out", report, "--db", database]) == 0
     alone = json.load(open(report))["metrics"]
     (probe,) = [r for r in d.stats(record["run_id"]) if (r["source"], r["step"]) == ("probe", 1024)]
-    assert probe["success_rate"] == alone["success"]["mean"]
-    assert probe["progress_mean"] == pytest.approx(alone["progress"]["mean"], abs=1e-5)
+    # the same trials in another program (vmapped): a trial's physics may round differently
+    assert probe["success_rate"] == pytest.approx(alone["success"]["mean"], abs=0.011)  # one trial of 100
+    assert probe["progress_mean"] == pytest.approx(alone["progress"]["mean"], abs=1e-3)
     probes.append(probe["progress_mean"])
   assert probes[0] != probes[1]
   leaves = [jax.tree_util.tree_leaves(p) for p in params]

@@ -34,12 +34,13 @@ STUDY = {"name": "t", "tasks": ["asc-inc-cog", "asc-uni-cog"], "seeds": [0, 1], 
 SLOW = "g/asc-inc-cog/400/s0"  # seed 0 runs slowly; its worker is killed during its first attempt
 
 
-def _workers(tmp_path, slow: str = "0") -> dict:
+def _workers(tmp_path, slow: str = "0", **fake) -> dict:
+  """Two workers of one CPU slot each; fake: more of the stand-in's FAKE_* settings."""
   specs = {}
   for name in ("a", "b"):
     scratch = tmp_path / f"worker-{name}"
     scratch.mkdir()
-    env = {"TMPDIR": str(scratch), "FAKE_SLOW_SEED": slow, "FAKE_CRASH_SEED": "1"}
+    env = {"TMPDIR": str(scratch), "FAKE_SLOW_SEED": slow, "FAKE_CRASH_SEED": "1", **fake}
     specs[name] = {"cls": Nanny, "options": {"nthreads": 1, "resources": {"cpu": 1}, "env": env,
                                               "local_directory": str(scratch)}}
   return specs
@@ -236,29 +237,39 @@ def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_not
 def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):
   """pack_seeds: a group's fresh runs that differ only in their seed are one train.run --seeds
   process per task (both tasks' packs at once, one slot each); each run's folder, records and
-  evaluation come back as a single run's; when the pack crashes (seed 1 does, in its first
-  session), each run is retried alone, from its own checkpoints where it saved one."""
-  study = {**STUDY, "seeds": [0, 1, 2], "baselines": [], "groups": [{**STUDY["groups"][0], "pack_seeds": True}]}
+  evaluation come back as a single run's. In each pack seed 2 stops early at step 200, then seed 1
+  crashes the program at step 300: seed 2 is evaluated as it ended (not trained on), seeds 0 and 1
+  are retried alone from their own checkpoints, with no retries left to use (a pack's failure uses
+  up none)."""
+  study = {**STUDY, "seeds": [0, 1, 2], "baselines": [], "retries": 0,
+           "groups": [{**STUDY["groups"][0], "pack_seeds": True}]}
   spec, folder = study_from_dict(study), str(tmp_path / "study")
-  with local_cluster(_workers(tmp_path, slow="")) as cluster, Client(cluster) as client:
+  with local_cluster(_workers(tmp_path, slow="", FAKE_EARLY_SEED="2", FAKE_CRASH_STEP="300")) as cluster, \
+       Client(cluster) as client:
     counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=io.StringIO()).run()
   assert counts == {"done": 6, "running": 0, "queued": 0, "failed": 0}
   state = json.load(open(os.path.join(folder, "state.json")))["cells"]
   db = ExperimentDB(os.path.join(folder, STUDY_DB))
   for c in cells(spec):
-    first, second = state[c.id]["attempts"]
-    pack = [f"g/{c.task}/400/s{s}" for s in (0, 1, 2)]
-    assert first["pack"] == pack and first["rc"] == 1 and first["phase"] == "train"
-    saved = c.seed < 2  # seeds 0 and 1 had saved a checkpoint when seed 1 crashed the pack; seed 2 had not
-    assert "pack" not in second and second["resumed"] == saved and second["rc"] == 0 and second["phase"] == "evaluate"
-    run = cell_folder(folder, c)
+    attempts, run = state[c.id]["attempts"], cell_folder(folder, c)
+    assert attempts[0]["pack"] == [f"g/{c.task}/400/s{s}" for s in (0, 1, 2)]
     meta = json.load(open(os.path.join(run, "run.json")))
-    assert meta["seed"] == c.seed and meta["programs"] == ["0,1,2"] * saved + [str(c.seed)]
+    checkpoints = sorted(int(d) for d in os.listdir(os.path.join(run, "checkpoints")))
+    if c.seed == 2:  # ended by its early stop before the crash: evaluated, never trained again
+      assert [(a["rc"], a["phase"]) for a in attempts] == [(0, "evaluate")]
+      assert meta["programs"] == ["0,1,2"] and checkpoints[-1] == 200
+      assert db.run(meta["run_id"])["status"] == "stopped_early"
+    else:
+      first, second = attempts
+      assert first["rc"] == 1 and first["phase"] == "train" and "in a pack of 3 runs" in first["error"]
+      assert "pack" not in second and second["resumed"] and second["rc"] == 0 and second["phase"] == "evaluate"
+      assert meta["programs"] == ["0,1,2", str(c.seed)] and checkpoints[-1] == 400
+    assert meta["seed"] == c.seed
     own = ExperimentDB(os.path.join(run, "run.sqlite")).runs()
     assert [r["run_id"] for r in own] == [meta["run_id"]]  # its own rows only, as a single run's
     trials = [e for e in db.evals(meta["run_id"]) if e["scene"] == "hardest" and e["budget"] is None]
     assert sum(e["success"] for e in trials) == sum(fake_success(c.task, c.seed, 400, i) for i in range(4))
-    assert os.path.isdir(os.path.join(run, "checkpoints", "400")) and os.path.isdir(os.path.join(run, "milestones", "200"))
+    assert os.path.isdir(os.path.join(run, "milestones", "200"))
   starts = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["started"] for t in spec.tasks)
   ends = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["ended"] for t in spec.tasks)
   assert starts[1] < ends[0]  # the two packs ran at once

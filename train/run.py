@@ -29,6 +29,7 @@ from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
 from train.core.presets import SB3
+from train.core.run_record import seed_folder
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RESUMABLE, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
@@ -136,7 +137,7 @@ def group_plans(args) -> list[RunPlan]:
   if len(set(seeds)) != len(seeds) or len(seeds) < 2:
     raise RunError(f"--seeds needs at least two different seeds; got {args.seeds!r}")
   return [plan_run(argparse.Namespace(**{**vars(args), "seed": s, "seeds": None,
-                                         "out": os.path.join(args.out, f"s{s}") if args.out else None}))
+                                         "out": seed_folder(args.out, s) if args.out else None}))
           for s in seeds]
 
 
@@ -155,13 +156,19 @@ def _train_group(plans: list[RunPlan], args) -> int:
       print(f"error: {e}", file=sys.stderr)
       return 2
     dbs = [_start_records(q, args.db) for q in plans]
-    finals, statuses = [{} for _ in plans], ["crashed"] * len(plans)
+    ended: dict[int, str] = {}  # run index -> its status, recorded as soon as it ended
+
+    def on_end(i: int, final: dict) -> None:
+      ended[i] = STATUS[final["reason"]]
+      dbs[i].finish(plans[i].run_id, ended[i], final, final.get("step"), _detail(ended[i], stop, plans[i]))
+
     try:
-      finals = train_group(t, plans, dbs[0], stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints))
-      statuses = [STATUS[f["reason"]] for f in finals]
+      finals = train_group(t, plans, dbs[0], stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints), on_end)
     finally:
-      for q, db, final, status in zip(plans, dbs, finals, statuses):
-        db.finish(q.run_id, status, final, final.get("step"), _detail(status, stop, q))
+      for i, (q, db) in enumerate(zip(plans, dbs)):
+        if i not in ended:  # the program failed before this run ended
+          db.finish(q.run_id, "crashed", {}, None, _detail("crashed", stop, q))
+    statuses = [ended[i] for i in range(len(plans))]
   for q, final in zip(plans, finals):
     print(f"s{q.seed}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
   if "interrupted" in statuses:

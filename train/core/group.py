@@ -12,7 +12,7 @@ import dataclasses
 import os
 import sys
 import time
-from typing import Any
+from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
@@ -92,17 +92,21 @@ def compile_group(t: Training, n: int, stream=None):
   return compiled
 
 
-def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions) -> tuple[Member, Reporter]:
-  """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of this run."""
+def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions,
+            on_end: Callable[[dict], None]) -> tuple[Member, Reporter]:
+  """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of this run;
+  on_end(summary): told as soon as the run has ended, checkpointed and exported."""
   ti = dataclasses.replace(t, plan=plan)
   checkpointer = checkpointer_of(ti, db, options)
   reporter = Reporter(plan.total_steps, 0, db, plan.run_id, f"{plan.out_dir}/tb", stream=Prefixed(f"s{plan.seed} "))
 
   def finish(result) -> dict[str, Any]:  # the run's checkpoint, policy and summary, as soon as it ends
     try:
-      return finish_run(ti, result, checkpointer, reporter)
+      summary = finish_run(ti, result, checkpointer, reporter)
     finally:
       reporter.close()
+    on_end(summary)
+    return summary
 
   return Member(checkpointer, reporter, schedule_of(ti, *shared), finish), reporter
 
@@ -114,15 +118,18 @@ def prepare_group(plans: list[RunPlan]) -> Training:
   return t
 
 
-def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOptions = SessionOptions()) -> list[dict[str, Any]]:
+def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOptions = SessionOptions(),
+                on_end: Callable[[int, dict], None] = lambda i, summary: None) -> list[dict[str, Any]]:
   """Trains the runs (t: prepare_group's) as one program until their total steps, early stops or a
-  stop request; each run is checkpointed and exported as it ends; returns each run's summary (as
-  train.core.session.train)."""
+  stop request; each run is checkpointed and exported as it ends, then on_end(its index, its
+  summary) records it (a run that ended stays ended if the program fails later); returns each
+  run's summary (as train.core.session.train)."""
   states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(p.seed) for p in plans]))
   update = compile_group(t, len(plans))
   evaluate = evaluator_of(t)  # compiled once for all
   probe = GroupProbe(t) if any(p.probe_every for p in plans) else None  # every run's at once
-  parts = [_member(t, p, db, (evaluate, probe and probe.member(i)), options) for i, p in enumerate(plans)]
+  parts = [_member(t, p, db, (evaluate, probe and probe.member(i)), options, lambda summary, i=i: on_end(i, summary))
+           for i, p in enumerate(plans)]
   try:
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
                      probe.at if probe else lambda states, step: None).run(states, 0, plans[0].total_steps)

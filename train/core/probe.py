@@ -2,7 +2,9 @@
 terrain; random areas for navigation): the very trials of `python -m train.evaluate RUN --scene
 SCENE` (the same compiled program: same reset keys, deterministic policy), compiled
 once and run between updates on the current parameters, so an early stop on its success is the
-final evaluation's (and the evaluation finds the program in the persistent compilation cache)."""
+final evaluation's (and the evaluation finds the program in the persistent compilation cache).
+GroupProbe, for the runs of one program, runs the same trials vmapped over the runs' policies: the
+same trials in another program, which may round a trial's physics differently."""
 
 from __future__ import annotations
 
@@ -44,16 +46,21 @@ class GroupProbe:
     self._params = t.learner.policy_params
     self._run = group_trial_runner(t.plan.cfg, t.plan.cfg.scene.probe_scene, act_from_params(t.spec), trials,
                                    EVAL_EPS, EVAL_SEED)
-    self._states, self._step, self._figures = None, None, {}
+    self._states, self._figures = None, None
 
   def at(self, states, step: int) -> None:
-    """The program's states (a leading run axis) after the update that reached `step`."""
-    self._states, self._step = states, step
+    """The program's states (a leading run axis) after the update that reached `step`: what the
+    next probe asked for reads (nothing probed yet at this step)."""
+    del step  # every run's probe at a step comes after the update that reached it
+    self._states, self._figures = states, None
 
   def member(self, i: int):
-    """probe(state) -> run i's metrics at the current step (its state is the program's slice i)."""
+    """probe(state) -> run i's metrics on the program's states named last (`at`); the state given
+    (the program's slice i) is not read: every run's trials were, or are now, run at once."""
     def probe(_state) -> dict[str, float]:
-      if self._step not in self._figures:
-        self._figures = {self._step: self._run(to_host(self._params(self._states)))}
-      return means(self._figures[self._step][i])
+      if self._states is None:
+        raise RuntimeError("GroupProbe: no states named yet (the program's loop calls at() after each update)")
+      if self._figures is None:
+        self._figures = self._run(to_host(self._params(self._states)))
+      return means(self._figures[i])
     return probe

@@ -37,6 +37,11 @@ def read_run_record(run_dir: str, required: tuple[str, ...] = REQUIRED) -> dict:
   return meta
 
 
+def seed_folder(out: str, seed: int) -> str:
+  """The folder of seed `seed`'s run among the runs of one program (train.run --seeds S,... --out OUT)."""
+  return os.path.join(out, f"s{seed}")
+
+
 def run_id_in(run_dir: str) -> str | None:
   """The run id a run folder records, if it has a readable record yet."""
   try:

@@ -216,8 +216,12 @@ class StudyRunner:
                    error=res.get("error") or ("" if res["rc"] == 0 else res["log_tail"][-500:]))
     if stopped and res["rc"] != 0:
       attempt.update(stopped=True, error=attempt["error"] or "the study was stopped")
+    if attempt.get("pack") and res["rc"] != 0:
+      attempt["error"] = f"in a pack of {len(attempt['pack'])} runs (one program): {attempt['error']}"
     db.log_attempt(self.spec.name, cid, len(record["attempts"]), attempt, run_id_in(local))
-    failures = sum(1 for a in record["attempts"] if a["rc"] != 0 and not a.get("stopped"))
+    # a pack's failure uses up no run's retries: any of its runs may have failed it, and each is
+    # retried alone (never packed again)
+    failures = sum(1 for a in record["attempts"] if a["rc"] != 0 and not a.get("stopped") and not a.get("pack"))
     retry = res["rc"] != 0 and failures <= self.spec.retries
     record["status"] = "done" if res["rc"] == 0 else "queued" if retry else "failed"
     return retry
@@ -231,7 +235,7 @@ class StudyRunner:
           lambda dask_scheduler: [ts.key for ws in dask_scheduler.workers.values() for ts in ws.executing])
     except Exception:  # noqa: BLE001  (a scheduler going away must not stop the study)
       return None
-    return sum(len(self.owners.get(key, [key])) for key in keys)
+    return sum(len(self.owners.get(key, ())) for key in keys)  # this study's tasks only
 
   def _report(self, t0: float, finished: int) -> None:
     _progress(self.spec.name, self.state, t0, finished, self._running(), self.stream)

@@ -15,7 +15,7 @@ import tarfile
 import tempfile
 
 from mjx_tracks import atomic
-from train.core.run_record import run_id_in
+from train.core.run_record import run_id_in, seed_folder
 from train.db import ExperimentDB
 
 # what a worker runs, after its own Python (sys.executable there: workers may be other machines)
@@ -90,12 +90,7 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
       unpack(resume, out)
     phase, rc = _train_then_evaluate(run_args, eval_args, out, os.path.join(out, RUN_DB), resume is not None,
                                      train, commands, log)
-    output = open(log).read() if os.path.exists(log) else ""
-    if not os.path.isdir(out):
-      return {"rc": rc, "phase": phase, "tar": None, "log_tail": output[-2000:], "worker": _worker_name()}
-    with open(os.path.join(out, "study-attempts.log"), "a") as f:  # every attempt's output, in order
-      f.write(output)
-    return {"rc": rc, "phase": phase, "tar": pack(out), "log_tail": output[-2000:], "worker": _worker_name()}
+    return _outcome(out, rc, phase, open(log).read() if os.path.exists(log) else "")
   finally:
     shutil.rmtree(scratch, ignore_errors=True)
 
@@ -103,46 +98,65 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
 def run_pack(pack_args: list[str], seeds: list[int], eval_args: list[str],
              commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
   """First attempts of cells that differ only in their seed, as one program (`train.run --seeds`);
-  then each run's evaluation, side by side. {"cells": {seed: run_cell's result}}: each run's folder
-  (OUT/s<seed>) comes back with its own records (run.sqlite) and the pack's training output."""
+  then the evaluation of each run that ended (its total steps or its early stop; also where the
+  program failed later, e.g. by another run), side by side. {"cells": {seed: run_cell's result}}:
+  each run's folder comes back with its own records (run.sqlite) and the pack's training output."""
   scratch = tempfile.mkdtemp(prefix="study-pack-")
   out, shared_db, log = (os.path.join(scratch, name) for name in ("pack", "pack.sqlite", "train.log"))
   try:
     rc = _call([sys.executable, *commands[0], *pack_args, "--out", out, "--db", shared_db], log, None, "train")
-    folders = {s: os.path.join(out, f"s{s}") for s in seeds}
-    for folder in folders.values():  # each run's rows in a database of its own, as a single run's
-      if os.path.isdir(folder) and os.path.exists(shared_db):
-        ExperimentDB(os.path.join(folder, RUN_DB)).import_runs(shared_db, only=[run_id_in(folder)])
-    evaluated = _evaluate_side_by_side(folders, eval_args, commands[1], scratch) if rc == 0 and eval_args else {}
-    trained = open(log).read() if os.path.exists(log) else ""
-    return {"cells": {s: _pack_result(folders[s], trained, *evaluated.get(s, ("train", rc, ""))) for s in seeds}}
+    folders = {s: seed_folder(out, s) for s in seeds}
+    ended = [s for s in seeds if _ended(folders[s], shared_db)]
+    for s in seeds:  # each run's rows in a database of its own, as a single run's
+      if os.path.isdir(folders[s]) and os.path.exists(shared_db):
+        ExperimentDB(os.path.join(folders[s], RUN_DB)).import_runs(shared_db, only=[run_id_in(folders[s])])
+    evaluated = _evaluate_side_by_side({s: folders[s] for s in ended}, eval_args, commands[1], scratch) \
+        if eval_args else {s: ("train", 0, "") for s in ended}
+    trained, results = open(log).read() if os.path.exists(log) else "", {}
+    for s in seeds:  # a run that did not end failed with the program (its checkpoints, if any, come back)
+      phase, code, output = evaluated.get(s, ("train", rc or 1, ""))
+      results[s] = _outcome(folders[s], code, phase, trained + output)
+    return {"cells": results}
   finally:
     shutil.rmtree(scratch, ignore_errors=True)
 
 
+ENDED = ("done", "stopped_early")  # a run's database status once trained: to its total steps, or early stop
+
+
+def _ended(folder: str, db: str) -> bool:
+  """Whether the run in `folder` ended (its record in the pack's database says so)."""
+  run_id = run_id_in(folder)
+  if run_id is None or not os.path.exists(db):
+    return False
+  try:
+    return ExperimentDB(db).run(run_id)["status"] in ENDED
+  except KeyError:
+    return False
+
+
 def _evaluate_side_by_side(folders: dict[int, str], eval_args: list[str], command: tuple[str, ...],
                            scratch: str) -> dict[int, tuple[str, int, str]]:
-  """Evaluates every run folder at once (one process each; on a GPU none preallocates memory);
-  {seed: ("evaluate", exit code, output)}."""
+  """Evaluates the run folders at once (one process each; on a GPU none preallocates memory);
+  {seed: ("evaluate", exit code, output)}. Any started process is waited for, whatever happens."""
   env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}
-  procs = {}
-  for s, folder in folders.items():
-    log = open(os.path.join(scratch, f"evaluate-s{s}.log"), "w")
-    argv = [sys.executable, *command, folder, *eval_args, "--db", os.path.join(folder, RUN_DB)]
-    procs[s] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log)
-  done = {}
-  for s, (proc, log) in procs.items():
-    rc = proc.wait()
-    log.close()
-    done[s] = ("evaluate", rc, open(log.name).read())
+  procs, done = {}, {}
+  try:
+    for s, folder in folders.items():
+      with open(os.path.join(scratch, f"evaluate-s{s}.log"), "w") as log:
+        argv = [sys.executable, *command, folder, *eval_args, "--db", os.path.join(folder, RUN_DB)]
+        procs[s] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
+  finally:
+    for s, (proc, name) in procs.items():
+      done[s] = ("evaluate", proc.wait(), open(name).read())
   return done
 
 
-def _pack_result(folder: str, trained: str, phase: str, rc: int, evaluated: str) -> dict:
-  """run_cell's result of one run of a pack."""
-  output = trained + evaluated
+def _outcome(folder: str, rc: int, phase: str, output: str) -> dict:
+  """An attempt's result: {"rc", "phase", "tar" (the run folder, or None), "log_tail", "worker"};
+  the output is appended to the folder's study-attempts.log (every attempt's, in order)."""
   if not os.path.isdir(folder):
-    return {"rc": rc or 1, "phase": phase, "tar": None, "log_tail": output[-2000:], "worker": _worker_name()}
+    return {"rc": rc, "phase": phase, "tar": None, "log_tail": output[-2000:], "worker": _worker_name()}
   with open(os.path.join(folder, "study-attempts.log"), "a") as f:
     f.write(output)
   return {"rc": rc, "phase": phase, "tar": pack(folder), "log_tail": output[-2000:], "worker": _worker_name()}
