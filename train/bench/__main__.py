@@ -1,5 +1,5 @@
 """`python -m train.bench NAME [options] [--out FILE]`: run one benchmark (NAME: env, physics,
-scaling, ablate, time-to-solve, baselines, speeds, gate (exits 1 if a physics oracle fails), gym; `python -m train.bench NAME --help` for its options) and write its
+scaling, ablate, time-to-solve, baselines, speeds, gate (exits 1 if a physics oracle fails), gym, group; `python -m train.bench NAME --help` for its options) and write its
 rows, with device, command and date, to FILE (default results/bench/NAME-<device kind>.json)."""
 
 from __future__ import annotations
@@ -7,11 +7,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from train.bench import ablate, baselines, env, gate, gym, physics, scaling, speeds, time_to_solve
+from train.bench import ablate, baselines, env, gate, group, gym, physics, scaling, speeds, time_to_solve
 from train.bench.result import BenchInputError, default_path, write_result
 
 BENCHES = {"env": env, "physics": physics, "scaling": scaling, "ablate": ablate, "time-to-solve": time_to_solve,
-           "baselines": baselines, "speeds": speeds, "gate": gate, "gym": gym}
+           "baselines": baselines, "speeds": speeds, "gate": gate, "gym": gym, "group": group}
 
 
 def parser() -> argparse.ArgumentParser:

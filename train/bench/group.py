@@ -1,0 +1,64 @@
+"""group: the wall time of N runs trained as one program (`train.run --seeds 0,...,N-1`) against
+runs trained one process each, one after another (the first `--singles` seeds), every process
+timed from start to exit. Issue 30's target is N = 20 one-robot SAC runs of the paper's regime in
+the wall time of 2 single runs: `group_in_singles` (the program's wall time over one single run's
+mean) <= 2. Each process compiles from scratch in an empty compilation cache of its own (`--warm`:
+the machine's cache, e.g. for a quick check); every run trains its whole budget (`--early-stop
+none`); extra `train.run` arguments follow `--`."""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+from train.bench.result import BenchInputError
+
+PAPER = ["--task", "asc-inc-cog", "--algo", "sac", "--preset", "paper"]  # the default runs: the paper's regime
+
+
+def add_args(p) -> None:
+  p.add_argument("--runs", type=int, default=20, help="runs in the program (seeds 0..N-1; default %(default)s)")
+  p.add_argument("--singles", type=int, default=2, help="runs timed one process each (default %(default)s)")
+  p.add_argument("--steps", type=int, default=20_000, help="steps of every run (default: the paper's %(default)s)")
+  p.add_argument("--warm", action="store_true", help="use the machine's compilation cache (default: empty caches)")
+  p.add_argument("--work", help="folder for the runs (default: a new temporary one)")
+  p.add_argument("train_args", nargs="*", metavar="-- ARGS",
+                 help=f"train.run arguments of every run (default: {' '.join(PAPER)})")
+
+
+def _timed(argv: list[str], work: str, name: str, warm: bool) -> float:
+  """Runs `python -m train.run ARGV --out WORK/NAME --db WORK/NAME.sqlite`; its process wall time (s)."""
+  env = dict(os.environ) if warm else {**os.environ, "MJX_TRACKS_CACHE": os.path.join(work, f"{name}-cache")}
+  cmd = [sys.executable, "-m", "train.run", *argv, "--out", os.path.join(work, name),
+         "--db", os.path.join(work, f"{name}.sqlite")]
+  t0 = time.time()
+  with open(os.path.join(work, f"{name}.log"), "w") as log:
+    rc = subprocess.call(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+  if rc != 0:
+    raise BenchInputError(f"{' '.join(cmd[1:])} exited {rc}; its output: {log.name}")
+  return time.time() - t0
+
+
+def run(args) -> tuple[list[dict], dict]:
+  if args.runs < 2 or not 1 <= args.singles <= args.runs:
+    raise BenchInputError(f"--runs >= 2 and 1 <= --singles <= --runs; got {args.runs} and {args.singles}")
+  work = args.work or tempfile.mkdtemp(prefix="bench-group-")
+  base = [*(args.train_args or PAPER), "--steps", str(args.steps), "--early-stop", "none"]
+  rows = []
+  for seed in range(args.singles):
+    rows.append({"mode": "single", "seed": seed, "process_wall_s": round(_timed([*base, "--seed", str(seed)], work,
+                                                                                 f"single-s{seed}", args.warm), 1)})
+    print(rows[-1], flush=True)
+  seeds = ",".join(map(str, range(args.runs)))
+  rows.append({"mode": "group", "runs": args.runs,
+               "process_wall_s": round(_timed([*base, "--seeds", seeds], work, "group", args.warm), 1)})
+  print(rows[-1], flush=True)
+  single = statistics.mean(r["process_wall_s"] for r in rows if r["mode"] == "single")
+  group = rows[-1]["process_wall_s"]
+  return rows, {"train_args": base, "runs": args.runs, "single_mean_s": round(single, 1),
+                "group_in_singles": round(group / single, 2), "group_speedup": round(args.runs * single / group, 2),
+                "work": work}
