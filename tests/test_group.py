@@ -1,5 +1,5 @@
 """Several runs in one compiled program (`train.run --seeds`): the per-run loop with fakes, the
-program's runs kept apart, and the command end to end."""
+program's runs kept apart, the command end to end, and its benchmark (`train.bench group`)."""
 
 import json
 import os
@@ -13,6 +13,7 @@ from helpers import TRAIN_TINY
 
 from train import db as dbmod
 from train import evaluate, run
+from train.bench.__main__ import main as bench_main
 from train.core.checkpoints import RunCheckpoints
 from train.core.early_stop import EarlyStop
 from train.core.group_loop import GroupLoop, Member
@@ -96,6 +97,31 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
   assert run.main(["--resume", os.path.join(out, "s1"), "--steps", "1536", "--db", database]) == 0
   assert "from its checkpoint at step 1,024" in capsys.readouterr().out
   assert RunCheckpoints(os.path.join(out, "s1")).latest_step() == 1536
+
+
+# `python -m train.bench group` here, after the program above compiled what it runs (the machine's cache)
+def test_the_group_bench_times_single_runs_and_one_program_of_all(tmp_path):
+  """N runs as one program against single runs, each process timed; every run of both kinds
+  trains its whole budget, and the figures follow from the rows."""
+  out, work = str(tmp_path / "group.json"), tmp_path / "work"
+  work.mkdir()
+  assert bench_main(["group", "--runs", "2", "--singles", "1", "--steps", "1024", "--warm", "--work", str(work),
+               "--out", out, "--", *TRAIN_TINY, "--probe-every", "512", "--checkpoint-every", "0"]) == 0
+  result = json.load(open(out))
+  single, group = result["rows"]
+  assert single["mode"] == "single" and group == {"mode": "group", "runs": 2, "process_wall_s": group["process_wall_s"]}
+  assert result["group_in_singles"] == round(group["process_wall_s"] / single["process_wall_s"], 2)
+  assert result["group_speedup"] == round(2 * single["process_wall_s"] / group["process_wall_s"], 2)
+  for name, seeds in (("single-s0", {0}), ("group", {0, 1})):  # every run trained its whole budget
+    runs = dbmod.ExperimentDB(str(work / f"{name}.sqlite")).runs()
+    assert {r["seed"] for r in runs} == seeds and all(r["status"] == "done" for r in runs)
+    assert all(json.loads(r["final_json"])["step"] == 1024 for r in runs)
+  assert "--early-stop none" in " ".join(result["train_args"])
+
+
+def test_the_group_bench_refuses_a_group_of_one_in_one_line(capsys):
+  assert bench_main(["group", "--runs", "1"]) == 2
+  assert capsys.readouterr().err.startswith("error: --runs >= 2")
 
 
 @pytest.mark.parametrize("argv, words", [
