@@ -99,24 +99,31 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
   assert RunCheckpoints(os.path.join(out, "s1")).latest_step() == 1536
 
 
-# `python -m train.bench group` here, after the program above compiled what it runs (the machine's cache)
-def test_the_group_bench_times_single_runs_and_one_program_of_all(tmp_path):
-  """N runs as one program against single runs, each process timed; every run of both kinds
-  trains its whole budget, and the figures follow from the rows."""
+def test_the_group_bench_times_single_runs_and_one_program_of_all(tmp_path, monkeypatch):
+  """N runs as one program against single runs, each process timed (with the study tests' stand-in
+  for train.run: no JAX); every run of both kinds trains its whole budget, the figures follow
+  from the rows, and train.run itself takes the arguments the bench gives it."""
+  from train.bench import group as bench_group
+  fake = os.path.join(os.path.dirname(__file__), "fake_study_run.py")
+  monkeypatch.setattr(bench_group, "TRAIN", (fake, "train"))
   out, work = str(tmp_path / "group.json"), tmp_path / "work"
   work.mkdir()
-  assert bench_main(["group", "--runs", "2", "--singles", "1", "--steps", "1024", "--warm", "--work", str(work),
-               "--out", out, "--", *TRAIN_TINY, "--probe-every", "512", "--checkpoint-every", "0"]) == 0
+  given = ["--task", "asc-inc-cog", "--algo", "ppo", "--preset", "cpu"]
+  assert bench_main(["group", "--runs", "3", "--singles", "2", "--steps", "300", "--work", str(work),
+                     "--out", out, "--", *given]) == 0
   result = json.load(open(out))
-  single, group = result["rows"]
-  assert single["mode"] == "single" and group == {"mode": "group", "runs": 2, "process_wall_s": group["process_wall_s"]}
-  assert result["group_in_singles"] == round(group["process_wall_s"] / single["process_wall_s"], 2)
-  assert result["group_speedup"] == round(2 * single["process_wall_s"] / group["process_wall_s"], 2)
-  for name, seeds in (("single-s0", {0}), ("group", {0, 1})):  # every run trained its whole budget
+  assert [r["mode"] for r in result["rows"]] == ["single", "single", "group"]
+  single = sum(r["process_wall_s"] for r in result["rows"][:2]) / 2
+  group = result["rows"][-1]["process_wall_s"]
+  assert result["group_in_singles"] == round(group / single, 2) and result["group_speedup"] == round(3 * single / group, 2)
+  for name, seeds in (("single-s0", {0}), ("single-s1", {1}), ("group", {0, 1, 2})):  # whole budgets
     runs = dbmod.ExperimentDB(str(work / f"{name}.sqlite")).runs()
     assert {r["seed"] for r in runs} == seeds and all(r["status"] == "done" for r in runs)
-    assert all(json.loads(r["final_json"])["step"] == 1024 for r in runs)
-  assert "--early-stop none" in " ".join(result["train_args"])
+    assert all(os.path.isdir(os.path.join(r["out_dir"], "checkpoints", "300")) for r in runs)
+  assert result["train_args"] == [*given, "--steps", "300", "--early-stop", "none"]
+  for extra in (["--seed", "0"], ["--seeds", "0,1,2"]):  # train.run's own parser takes what the bench gives
+    parsed = run.parser().parse_args([*result["train_args"], *extra, "--out", "o", "--db", "d"])
+    assert parsed.early_stop == "none" and parsed.steps == 300
 
 
 def test_the_group_bench_refuses_a_group_of_one_in_one_line(capsys):

@@ -18,6 +18,7 @@ import time
 from train.bench.result import BenchInputError
 
 PAPER = ["--task", "asc-inc-cog", "--algo", "sac", "--preset", "paper"]  # the default runs: the paper's regime
+TRAIN = ("-m", "train.run")  # what each timed process runs, after this Python
 
 
 def add_args(p) -> None:
@@ -33,7 +34,7 @@ def add_args(p) -> None:
 def _timed(argv: list[str], work: str, name: str, warm: bool) -> float:
   """Runs `python -m train.run ARGV --out WORK/NAME --db WORK/NAME.sqlite`; its process wall time (s)."""
   env = dict(os.environ) if warm else {**os.environ, "MJX_TRACKS_CACHE": os.path.join(work, f"{name}-cache")}
-  cmd = [sys.executable, "-m", "train.run", *argv, "--out", os.path.join(work, name),
+  cmd = [sys.executable, *TRAIN, *argv, "--out", os.path.join(work, name),
          "--db", os.path.join(work, f"{name}.sqlite")]
   t0 = time.time()
   with open(os.path.join(work, f"{name}.log"), "w") as log:
@@ -43,11 +44,16 @@ def _timed(argv: list[str], work: str, name: str, warm: bool) -> float:
   return time.time() - t0
 
 
+def train_args(args) -> list[str]:
+  """The train.run arguments every timed run shares (each adds --seed or --seeds, --out, --db)."""
+  return [*(args.train_args or PAPER), "--steps", str(args.steps), "--early-stop", "none"]
+
+
 def run(args) -> tuple[list[dict], dict]:
   if args.runs < 2 or not 1 <= args.singles <= args.runs:
     raise BenchInputError(f"--runs >= 2 and 1 <= --singles <= --runs; got {args.runs} and {args.singles}")
   work = args.work or tempfile.mkdtemp(prefix="bench-group-")
-  base = [*(args.train_args or PAPER), "--steps", str(args.steps), "--early-stop", "none"]
+  base = train_args(args)
   rows = []
   for seed in range(args.singles):
     rows.append({"mode": "single", "seed": seed, "process_wall_s": round(_timed([*base, "--seed", str(seed)], work,
