@@ -10,12 +10,11 @@ from __future__ import annotations
 
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 
 from train.bench.result import BenchInputError
+from train.bench.timing import process_wall_s
 
 PAPER = ["--task", "asc-inc-cog", "--algo", "sac", "--preset", "paper"]  # the default runs: the paper's regime
 TRAIN = ("-m", "train.run")  # what each timed process runs, after this Python
@@ -33,15 +32,13 @@ def add_args(p) -> None:
 
 def _timed(argv: list[str], work: str, name: str, warm: bool) -> float:
   """Runs `python -m train.run ARGV --out WORK/NAME --db WORK/NAME.sqlite`; its process wall time (s)."""
-  env = dict(os.environ) if warm else {**os.environ, "MJX_TRACKS_CACHE": os.path.join(work, f"{name}-cache")}
   cmd = [sys.executable, *TRAIN, *argv, "--out", os.path.join(work, name),
          "--db", os.path.join(work, f"{name}.sqlite")]
-  t0 = time.time()
-  with open(os.path.join(work, f"{name}.log"), "w") as log:
-    rc = subprocess.call(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+  log = os.path.join(work, f"{name}.log")
+  rc, wall = process_wall_s(cmd, None if warm else os.path.join(work, f"{name}-cache"), log)
   if rc != 0:
-    raise BenchInputError(f"{' '.join(cmd[1:])} exited {rc}; its output: {log.name}")
-  return time.time() - t0
+    raise BenchInputError(f"{' '.join(cmd[1:])} exited {rc}; its output: {log}")
+  return wall
 
 
 def train_args(args) -> list[str]:

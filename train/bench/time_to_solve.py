@@ -13,9 +13,9 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
 from mjx_tracks.envs.config import load_config
+from train.bench.timing import process_wall_s
 from train.core.early_stop import EARLY_STOP_SUCCESS
 
 
@@ -35,9 +35,7 @@ def _solve(args, seed: int, work: str) -> dict:
   out, db, cache = (os.path.join(work, f"s{seed}{x}") for x in ("", ".sqlite", "-cache"))
   train = [sys.executable, "-m", "train.run", "--task", args.task, "--steps", str(args.steps), "--early-stop",
            f"success={args.threshold}", "--seed", str(seed), "--out", out, "--db", db, *(["--preset", args.preset] if args.preset else [])]
-  t0 = time.time()
-  rc = subprocess.call(train, env={**os.environ, "MJX_TRACKS_CACHE": cache})
-  wall = time.time() - t0
+  rc, wall = process_wall_s(train, cache)
   row = {"seed": seed, "rc": rc, "process_wall_s": round(wall, 1), "command": " ".join(train[1:])}
   if rc != 0:
     return {**row, "reason": "failed"}

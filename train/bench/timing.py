@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
 import time
 
 import jax
@@ -27,3 +29,17 @@ def time_env_step(core, n: int, reps: int):
   actions = lambda i: (jax.random.uniform(jax.random.PRNGKey(i), (n, core.action_size), minval=-1, maxval=1),)  # noqa: E731
   compile_s, step_s = timed(jax.jit(env.step), state, actions, reps)
   return state, compile_s, step_s
+
+
+def process_wall_s(cmd: list[str], cache: str | None, log: str | None = None) -> tuple[int, float]:
+  """(exit code, wall s from start to exit) of a process; cache: a compilation cache folder of its
+  own (MJX_TRACKS_CACHE; an empty one compiles from scratch), None: the machine's; log: where its
+  output goes (default: this process's)."""
+  env = dict(os.environ) if cache is None else {**os.environ, "MJX_TRACKS_CACHE": cache}
+  t0 = time.time()
+  if log is None:
+    rc = subprocess.call(cmd, env=env)
+  else:
+    with open(log, "w") as f:
+      rc = subprocess.call(cmd, stdout=f, stderr=subprocess.STDOUT, env=env)
+  return rc, time.time() - t0

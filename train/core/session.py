@@ -83,7 +83,7 @@ def schedule_of(t: Training, evaluate, probe) -> Schedule:
   plan, p = t.plan, t.plan.preset
   eval_every = -(-plan.total_steps // max(p.num_evals - 1, 1))
   return Schedule(p.training_metrics_steps, plan.early_stop,
-                  ((evaluate, eval_every), (probe if plan.probe_every else None, plan.probe_every)), plan.milestones,
+                  ((evaluate, eval_every), (probe, plan.probe_every)), plan.milestones,
                   lambda state, step, budget: _export(t, state, step, milestone_folder(budget)))
 
 

@@ -75,9 +75,13 @@ def _train_then_evaluate(run_args: list[str], eval_args: list[str], out: str, db
     given = ["--resume", out] if resume else [*run_args, "--out", out]
     rc = _call([sys.executable, *commands[0], *given, "--db", db], log, pid_path, "train")
   if rc == 0 and eval_args:
-    phase, rc = "evaluate", _call([sys.executable, *commands[1], out, *eval_args, "--db", db], log, pid_path,
-                                  "evaluate")
+    phase, rc = "evaluate", _call(_evaluate_argv(commands[1], out, eval_args, db), log, pid_path, "evaluate")
   return phase, rc
+
+
+def _evaluate_argv(command: tuple[str, ...], run: str, eval_args: list[str], db: str) -> list[str]:
+  """The evaluation of the run in folder `run`, its records to `db`."""
+  return [sys.executable, *command, run, *eval_args, "--db", db]
 
 
 def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, train: bool = True,
@@ -144,7 +148,7 @@ def _evaluate_side_by_side(folders: dict[int, str], eval_args: list[str], comman
   try:
     for s, folder in folders.items():
       with open(os.path.join(scratch, f"evaluate-s{s}.log"), "w") as log:
-        argv = [sys.executable, *command, folder, *eval_args, "--db", os.path.join(folder, RUN_DB)]
+        argv = _evaluate_argv(command, folder, eval_args, os.path.join(folder, RUN_DB))
         procs[s] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
   finally:
     for s, (proc, name) in procs.items():
