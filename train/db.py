@@ -69,6 +69,7 @@ EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed
 # a run's final status -> the event that records it
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
                 "failed": "failed", "crashed": "crashed"}
+FINISHED = tuple(s for s, event in STATUS_EVENT.items() if event == "finished")  # a training that ended as it should
 EVAL_COLUMNS = ("scene", "budget", "trial", *EPISODE_NAMES)  # budget: the milestone of the policy (train.run --milestones); NULL: final
 # columns a database written before they existed may lack: table -> (column, type); every metric
 # column, so a metric added to mjx_tracks.metrics reaches old databases too (NULL in their old rows)

@@ -13,7 +13,7 @@ import sys
 import threading
 import traceback
 
-from train.db import ExperimentDB, utc_now
+from train.db import FINISHED, ExperimentDB, utc_now
 from train.evaluation import EVAL_TRIALS
 from train.study.spec import Cell, cells, study_from_dict
 from train.study.worker import EVALUATE, TRAIN, read_pid_file, run_in_place
@@ -220,9 +220,6 @@ class Launcher:
         task.cancel()  # still waiting for a slot
         stop_run_in(self.db, launch["out_dir"])
       return f"launch {launch_id} cancelled"
-
-
-FINISHED = ("done", "stopped_early")  # run statuses of a training that ended as it should
 
 
 def run_in(db: ExperimentDB, out_dir: str | None) -> dict | None:

@@ -16,7 +16,7 @@ import tempfile
 
 from mjx_tracks import atomic
 from train.core.run_record import run_id_in, seed_folder
-from train.db import ExperimentDB
+from train.db import FINISHED, ExperimentDB
 
 # what a worker runs, after its own Python (sys.executable there: workers may be other machines)
 TRAIN = ("-m", "train.run")
@@ -125,16 +125,13 @@ def run_pack(pack_args: list[str], seeds: list[int], eval_args: list[str],
     shutil.rmtree(scratch, ignore_errors=True)
 
 
-ENDED = ("done", "stopped_early")  # a run's database status once trained: to its total steps, or early stop
-
-
 def _ended(folder: str, db: str) -> bool:
   """Whether the run in `folder` ended (its record in the pack's database says so)."""
   run_id = run_id_in(folder)
   if run_id is None or not os.path.exists(db):
     return False
   try:
-    return ExperimentDB(db).run(run_id)["status"] in ENDED
+    return ExperimentDB(db).run(run_id)["status"] in FINISHED  # its total steps, or its early stop
   except KeyError:
     return False
 
