@@ -171,3 +171,41 @@ def test_runs_whose_states_do_not_fit_are_refused_in_one_line(tmp_path):
   check_memory(t, 20, 41 * one)
   with pytest.raises(RunError, match=r"20 runs need ~.* GB .* fewer seeds or a smaller replay buffer"):
     check_memory(t, 20, 39 * one)
+
+
+def test_a_question_for_every_run_is_computed_once_per_update_and_each_run_reads_its_own():
+  from train.core.group_loop import AllRuns
+  calls = []
+  shared = AllRuns(lambda states: calls.append(states) or [f"run {i} of {states}" for i in range(2)])
+  first, second = shared.member(0), shared.member(1)
+  with pytest.raises(RuntimeError, match="no states named yet"):
+    first(None)
+  shared.at("A", 10)
+  assert first.wanted() == "A" and (second(None), first(None)) == ("run 1 of A", "run 0 of A")
+  shared.at("B", 20)
+  assert first(None) == "run 0 of B" and calls == ["A", "B"]
+
+
+def test_the_programs_evaluation_is_each_runs_own_brax_evaluation(tmp_path):
+  """GroupEvaluator (every run's episodes in one unroll) against Brax's own evaluator of each run
+  (acting.Evaluator keyed by the run's seed, the run's policy alone), evaluation after evaluation:
+  the same metrics; a run given its neighbour's episodes, policy or key would differ."""
+  from train.core.build import brax_evaluator
+  from train.core.group import build_group
+  from train.core.group_evaluator import GroupEvaluator
+  from train.core.group_loop import run_slice
+  from train.core.mesh import to_host
+  from train.core.plan import plan_run
+  t = build_group([plan_run(run.parser().parse_args([*TRAIN_TINY, "--seed", "0", "--out", str(tmp_path / "r")]))])
+  seeds = [0, 3]
+  states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in seeds]))
+  group, alone = GroupEvaluator(t, seeds), [brax_evaluator(t, s) for s in seeds]
+  for _ in range(2):  # each run's key advances as its own evaluator's
+    got = group.evaluate(states)
+    for i in range(len(seeds)):
+      want = alone[i].run_evaluation(to_host(t.learner.policy_params(run_slice(states, i))), training_metrics={})
+      figures = [k for k in want if k.startswith("eval/episode_") or k.endswith("episode_length")]
+      assert len(figures) > 10 and set(figures) <= set(got[i])
+      for k in figures:
+        assert got[i][k] == pytest.approx(want[k], rel=1e-4, abs=1e-6), k
+  assert got[0]["eval/episode_reward"] != got[1]["eval/episode_reward"]

@@ -92,14 +92,30 @@ def compile_update(t: Training, stream=sys.stdout):
   return compiled
 
 
-def make_evaluator(t: Training, seed: int):
-  """Brax's evaluator on uniform scenes over the task's ranges, or None when the preset has none."""
+def has_evaluations(t: Training) -> bool:
+  """Whether the run's preset asks for Brax's evaluator (its eval/... reports) between updates."""
   p = t.plan.preset
-  if not getattr(p, "run_evals", True) or p.num_evals < 2:
-    return None
+  return getattr(p, "run_evals", True) and p.num_evals >= 2
+
+
+def eval_env(t: Training):
+  """The batched environment Brax's evaluator plays: uniform scenes over the task's ranges."""
+  return batched_env(TrackedRobotEnv(scene_config(t.plan.cfg, "uniform")))
+
+
+def brax_evaluator(t: Training, seed: int):
+  """Brax's evaluator of a run of seed `seed`: num_eval_envs episodes of eval_env, deterministic policy."""
   from brax.training import acting  # noqa: PLC0415
-  cfg = t.plan.cfg
-  eval_core = TrackedRobotEnv(scene_config(cfg, "uniform"))
-  return acting.Evaluator(batched_env(eval_core), functools.partial(t.learner.make_policy, deterministic=True),
-                          num_eval_envs=p.num_eval_envs, episode_length=cfg.episode.max_steps,
-                          action_repeat=1, key=jax.random.PRNGKey(seed + 1))
+  return acting.Evaluator(eval_env(t), functools.partial(t.learner.make_policy, deterministic=True),
+                          num_eval_envs=t.plan.preset.num_eval_envs, episode_length=t.plan.cfg.episode.max_steps,
+                          action_repeat=1, key=eval_key(seed))
+
+
+def eval_key(seed: int):
+  """The key Brax's evaluator of a run of seed `seed` starts from."""
+  return jax.random.PRNGKey(seed + 1)
+
+
+def make_evaluator(t: Training, seed: int):
+  """Brax's evaluator (brax_evaluator), or None when the preset has none."""
+  return brax_evaluator(t, seed) if has_evaluations(t) else None

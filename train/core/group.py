@@ -3,8 +3,8 @@ only in their seed train as one vmapped update on one device. Each run keeps eve
 its own has: its folder (run.json, checkpoints/, policy/, tb/), its database rows, its probe and
 early stop (a finished run is checkpointed and exported at once, its slot computed and
 discarded from then on), its milestones; `python -m train.run --resume
-RUN` continues any of them alone. Brax's evaluator is compiled once for all; the probe runs every
-run's trials in one rollout (train.core.probe.GroupProbe)."""
+RUN` continues any of them alone. Brax's evaluation of every run is one unroll
+(train.core.group_evaluator.GroupEvaluator), the probe of every run one rollout (train.core.probe.GroupProbe)."""
 
 from __future__ import annotations
 
@@ -17,12 +17,13 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 
-from train.core.build import Training, build
+from train.core.build import Training, build, has_evaluations
+from train.core.group_evaluator import GroupEvaluator
 from train.core.group_loop import GroupLoop, Member
 from train.core.plan import RunError, RunPlan
 from train.core.probe import GroupProbe
 from train.core.progress import Reporter
-from train.core.session import SessionOptions, checkpointer_of, evaluator_of, finish_run, schedule_of
+from train.core.session import SessionOptions, checkpointer_of, finish_run, schedule_of
 
 
 class Prefixed:
@@ -126,13 +127,19 @@ def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOpt
   run's summary (as train.core.session.train)."""
   states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(p.seed) for p in plans]))
   update = compile_group(t, len(plans))
-  evaluate = evaluator_of(t)  # compiled once for all
-  probe = GroupProbe(t) if any(p.probe_every for p in plans) else None  # every run's at once
-  parts = [_member(t, p, db, (evaluate, probe and probe.member(i)), options, lambda summary, i=i: on_end(i, summary))
-           for i, p in enumerate(plans)]
+  # every run's Brax evaluation in one unroll, every run's probe in one rollout
+  evaluate = GroupEvaluator(t, [p.seed for p in plans]) if has_evaluations(t) else None
+  probe = GroupProbe(t) if any(p.probe_every for p in plans) else None
+  parts = [_member(t, p, db, (evaluate and evaluate.member(i), probe and probe.member(i)), options,
+                   lambda summary, i=i: on_end(i, summary)) for i, p in enumerate(plans)]
+  shared = [s for s in (evaluate, probe) if s is not None]
+
+  def after_update(states, step: int) -> None:
+    for s in shared:
+      s.at(states, step)
   try:
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
-                     probe.at if probe else lambda states, step: None).run(states, 0, plans[0].total_steps)
+                     after_update).run(states, 0, plans[0].total_steps)
   finally:
     for _, reporter in parts:
       reporter.close()

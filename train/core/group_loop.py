@@ -30,6 +30,53 @@ def run_slice(states, i: int):
   return jax.tree_util.tree_map(lambda x: x[i], states)
 
 
+class AllRuns:
+  """A computation over every run of a program at once (compute(states) -> one result per run, in
+  the runs' order), asked for by each run in turn through its share (`member(i)`): the first run
+  to ask after an update computes every run's (e.g. train.core.probe.GroupProbe,
+  train.core.group_evaluator.GroupEvaluator). The program's loop names its states after each
+  update (`at`)."""
+
+  def __init__(self, compute: Callable[[Any], list]):
+    self._compute, self._states, self._results = compute, None, None
+
+  def at(self, states, step: int) -> None:
+    """The program's states (a leading run axis) after the update that reached `step`: what the
+    next question reads (nothing computed for them yet)."""
+    del step  # every run's question at a step comes after the update that reached it
+    self._states, self._results = states, None
+
+  def member(self, i: int) -> "RunShare":
+    return RunShare(self, i)
+
+  def states(self):
+    if self._states is None:
+      raise RuntimeError(f"{type(self).__name__}: no states named yet (the program's loop calls at() after each update)")
+    return self._states
+
+  def result(self, i: int):
+    """Run i's result for the states named last (computed for every run on the first question)."""
+    if self._results is None:
+      self._results = self._compute(self.states())
+    return self._results[i]
+
+
+class RunShare:
+  """Run i's share of an AllRuns computation, called as a run's evaluation is (train.core.loop.Track):
+  with `wanted()`, the program's states, instead of run i's slice of them (no copy of a run's
+  state is made for it)."""
+
+  def __init__(self, all_runs: AllRuns, i: int):
+    self.all_runs, self.i = all_runs, i
+
+  def wanted(self):
+    return self.all_runs.states()
+
+  def __call__(self, states):
+    del states  # the program's, named by at(): every run's result comes from them at once
+    return self.all_runs.result(self.i)
+
+
 class GroupLoop:
   """Runs the updates of several runs from a step until a total; see `run`."""
 
@@ -37,7 +84,7 @@ class GroupLoop:
                after_update: Callable[[Any, int], None] = lambda states, step: None):
     """update(states) -> (states, metrics), both with a leading run axis; stop.requested: not None
     once a stop was asked for; after_update(states, step): told the states after each update,
-    before any run's schedule (e.g. a probe of every run at once: train.core.probe.GroupProbe)."""
+    before any run's schedule (e.g. AllRuns.at: a probe or an evaluation of every run at once)."""
     self.update, self.spu, self.members, self.stop = update, steps_per_update, members, stop
     self.after_update = after_update
 

@@ -119,7 +119,8 @@ class Track:
       self.next_report += self.report_every
     for i, (evaluate, every) in enumerate(self.evals):
       if step >= self.next_evals[i]:
-        rows.append(self.reporter(step, self.clock.paused(evaluate, state_of())))
+        wanted = getattr(evaluate, "wanted", state_of)  # a program's share (AllRuns) reads all its runs' states
+        rows.append(self.reporter(step, self.clock.paused(evaluate, wanted())))
         self.next_evals[i] = _next(step, every)
     if self.early is not None:
       for r in rows:

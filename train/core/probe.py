@@ -12,6 +12,7 @@ import numpy as np
 
 from mjx_tracks.metrics import REPORT_COLUMN as COLUMNS  # per-trial figure -> report column
 from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, group_trial_runner, trial_runner
+from train.core.group_loop import AllRuns
 from train.core.mesh import to_host
 from train.core.policy import act_from_params
 
@@ -36,31 +37,13 @@ def means(fig: dict) -> dict[str, float]:
   return {PREFIX + column: float(np.mean(fig[name])) for name, column in COLUMNS.items()}
 
 
-class GroupProbe:
+class GroupProbe(AllRuns):
   """The probe of every run of one program (train.run --seeds) in one rollout: the same trials,
-  vmapped over the runs' policies, so probing n runs costs about one run's probe, not n. The
-  program's loop names its states after each update (`at`); `member(i)` is run i's probe, the
-  first of which to be asked at a step probes every run."""
+  vmapped over the runs' policies, so probing n runs costs about one run's probe, not n;
+  `member(i)` is run i's probe (train.core.group_loop.AllRuns)."""
 
   def __init__(self, t, trials: int = EVAL_TRIALS):
-    self._params = t.learner.policy_params
-    self._run = group_trial_runner(t.plan.cfg, t.plan.cfg.scene.probe_scene, act_from_params(t.spec), trials,
-                                   EVAL_EPS, EVAL_SEED)
-    self._states, self._figures = None, None
-
-  def at(self, states, step: int) -> None:
-    """The program's states (a leading run axis) after the update that reached `step`: what the
-    next probe asked for reads (nothing probed yet at this step)."""
-    del step  # every run's probe at a step comes after the update that reached it
-    self._states, self._figures = states, None
-
-  def member(self, i: int):
-    """probe(state) -> run i's metrics on the program's states named last (`at`); the state given
-    (the program's slice i) is not read: every run's trials were, or are now, run at once."""
-    def probe(_state) -> dict[str, float]:
-      if self._states is None:
-        raise RuntimeError("GroupProbe: no states named yet (the program's loop calls at() after each update)")
-      if self._figures is None:
-        self._figures = self._run(to_host(self._params(self._states)))
-      return means(self._figures[i])
-    return probe
+    params = t.learner.policy_params
+    run = group_trial_runner(t.plan.cfg, t.plan.cfg.scene.probe_scene, act_from_params(t.spec), trials,
+                             EVAL_EPS, EVAL_SEED)
+    super().__init__(lambda states: [means(fig) for fig in run(to_host(params(states)))])

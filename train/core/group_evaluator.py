@@ -1,0 +1,86 @@
+"""Brax's evaluation of every run of one program (`train.run --seeds`) in one unroll: the episodes
+`brax.training.acting.Evaluator` plays for each run (num_eval_envs episodes of uniform scenes,
+deterministic policy, reset keys from the run's own key sequence, which starts at
+train.core.build.eval_key(seed)), all runs' episodes in one batch, block i played by run i's
+policy; each run gets the metrics Brax's evaluator would report for it. Before, a program's runs
+were evaluated one after another (20 one-robot SAC runs: 20 evaluations of 10 episodes each)."""
+
+from __future__ import annotations
+
+import functools
+import time
+
+import jax
+import numpy as np
+from brax.envs.wrappers.training import EvalWrapper
+from brax.training import acting
+
+from train.core.build import Training, eval_env, eval_key
+from train.core.group_loop import AllRuns
+from train.core.mesh import to_host
+
+
+def group_policy(make_policy, params, runs: int):
+  """A policy for `runs` runs' episodes at once: observations in `runs` equal blocks, block i acted
+  on by make_policy(run i's params) (params: a leading run axis)."""
+  def block(x):
+    return x.reshape((runs, -1) + x.shape[1:])
+
+  def flat(x):
+    return x.reshape((-1,) + x.shape[2:])
+
+  def policy(obs, key):
+    actions, extras = jax.vmap(lambda p, o: make_policy(p)(o, key))(params, jax.tree.map(block, obs))
+    return flat(actions), jax.tree.map(flat, extras)
+  return policy
+
+
+def episode_metrics(eval_metrics, runs: int) -> list[dict[str, float]]:
+  """Each run's eval/... metrics from the episodes' (block i: run i's), as Brax's evaluator
+  aggregates one run's (acting.Evaluator.run_evaluation: means and stds over the episodes,
+  '..._per_step' sums divided by the episode's length)."""
+  steps = np.asarray(eval_metrics.episode_steps).reshape(runs, -1)
+  sums = {k: np.asarray(v).reshape(runs, -1) for k, v in eval_metrics.episode_metrics.items()}
+  out = []
+  for i in range(runs):
+    lengths = np.maximum(steps[i], 1.0).astype(float)
+    m = {}
+    for fn, suffix in ((np.mean, ""), (np.std, "_std")):
+      for name, v in sums.items():
+        m[f"eval/episode_{name}{suffix}"] = fn(v[i] / lengths if name.endswith("per_step") else v[i])
+    m["eval/avg_episode_length"], m["eval/std_episode_length"] = np.mean(steps[i]), np.std(steps[i])
+    out.append(m)
+  return out
+
+
+class GroupEvaluator(AllRuns):
+  """evaluate(states with a leading run axis) -> each run's Brax evaluation metrics, one unroll for
+  all; `member(i)`: run i's evaluation (train.core.group_loop.AllRuns)."""
+
+  def __init__(self, t: Training, seeds: list[int]):
+    runs, episodes, length = len(seeds), t.plan.preset.num_eval_envs, t.plan.cfg.episode.max_steps
+    env = EvalWrapper(eval_env(t))
+    make = functools.partial(t.learner.make_policy, deterministic=True)
+
+    def unroll(params, unroll_keys):
+      resets = jax.vmap(lambda k: jax.random.split(k, episodes))(unroll_keys)  # each run's own, as Brax's
+      first = env.reset(resets.reshape((runs * episodes,) + resets.shape[2:]))
+      final, _ = acting.generate_unroll(env, first, group_policy(make, params, runs), unroll_keys[0], length)
+      return final.info["eval_metrics"]
+
+    self._unroll, self._runs = jax.jit(unroll), runs
+    self._keys = jax.numpy.stack([eval_key(s) for s in seeds])
+    self._steps, self._walltime = runs * episodes * length, 0.0  # env steps per evaluation; s evaluating
+    self._params = t.learner.policy_params
+    super().__init__(self.evaluate)
+
+  def evaluate(self, states) -> list[dict[str, float]]:
+    """Every run's evaluation of the states' policies (each run's key advances as Brax's does)."""
+    split = jax.vmap(jax.random.split)(self._keys)
+    self._keys, unroll_keys = split[:, 0], split[:, 1]
+    t0 = time.time()
+    metrics = jax.tree.map(np.asarray, self._unroll(to_host(self._params(states)), unroll_keys))
+    seconds = time.time() - t0
+    self._walltime += seconds
+    shared = {"eval/epoch_eval_time": seconds, "eval/sps": self._steps / seconds, "eval/walltime": self._walltime}
+    return [{**shared, **m} for m in episode_metrics(metrics, self._runs)]
