@@ -1,23 +1,43 @@
 """The in-training evaluation on uniform scenes (Brax's evaluator, `[eval]` lines) of a preset that
-has one: it runs on a fresh learner state and reports finite figures over its episodes. (The CPU
-presets train without it, to keep the end-to-end tests short.)"""
+has one, for one run and for the runs of one program (`train.run --seeds`, every run's episodes in
+one unroll): on fresh learner states it reports finite figures over its episodes, and each run of a
+program gets what Brax's own evaluator of that run reports. (The CPU presets train without it, to
+keep the end-to-end tests short.)"""
 
 import dataclasses
 
+import jax
+import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from helpers import TINY
-from train.core.build import build, init_state
+from train.core.build import brax_evaluator, build
+from train.core.group_evaluator import GroupEvaluator
+from train.core.group_loop import run_slice
+from train.core.mesh import to_host
 from train.core.plan import plan_run
 from train.run import parser
-from train.core.session import evaluator_of
 
 
-def test_a_preset_with_evaluations_evaluates_a_fresh_policy_on_uniform_scenes(tmp_path):
+def test_a_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_that_run_gives(tmp_path):
+  """GroupEvaluator against Brax's own evaluator of each run (acting.Evaluator keyed by the run's
+  seed, the run's policy alone), evaluation after evaluation: the same metrics; a run given its
+  neighbour's episodes, policy or key would differ."""
   plan = plan_run(parser().parse_args(["--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", *TINY,
                                        "--out", str(tmp_path / "run")]))
-  plan = dataclasses.replace(plan, preset=dataclasses.replace(plan.preset, num_evals=2, num_eval_envs=4))
-  t = build(plan)
-  metrics = evaluator_of(t)(init_state(t, 0))
-  assert np.isfinite(metrics["eval/episode_reward"]) and metrics["eval/avg_episode_length"] > 0
-  assert 0.0 <= metrics["eval/episode_progress"] <= 1.0 and 0.0 <= metrics["eval/episode_goal_reached"] <= 1.0
+  t = build(dataclasses.replace(plan, preset=dataclasses.replace(plan.preset, num_evals=2, num_eval_envs=4)))
+  seeds = [0, 3]
+  states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in seeds]))
+  group, alone = GroupEvaluator(t, seeds), [brax_evaluator(t, s) for s in seeds]
+  for _ in range(2):  # each run's key advances as its own evaluator's
+    got = group.evaluate(states)
+    for i in range(len(seeds)):
+      want = alone[i].run_evaluation(to_host(t.learner.policy_params(run_slice(states, i))), training_metrics={})
+      assert np.isfinite(want["eval/episode_reward"]) and want["eval/avg_episode_length"] > 0
+      assert 0.0 <= want["eval/episode_progress"] <= 1.0 and 0.0 <= want["eval/episode_goal_reached"] <= 1.0
+      figures = [k for k in want if k.startswith("eval/episode_") or k.endswith("episode_length")]
+      assert len(figures) > 10 and set(figures) <= set(got[i])
+      for k in figures:
+        assert got[i][k] == pytest.approx(want[k], rel=1e-4, abs=1e-6), k
+  assert got[0]["eval/episode_reward"] != got[1]["eval/episode_reward"]

@@ -185,27 +185,3 @@ def test_a_question_for_every_run_is_computed_once_per_update_and_each_run_reads
   shared.at("B", 20)
   assert first(None) == "run 0 of B" and calls == ["A", "B"]
 
-
-def test_the_programs_evaluation_is_each_runs_own_brax_evaluation(tmp_path):
-  """GroupEvaluator (every run's episodes in one unroll) against Brax's own evaluator of each run
-  (acting.Evaluator keyed by the run's seed, the run's policy alone), evaluation after evaluation:
-  the same metrics; a run given its neighbour's episodes, policy or key would differ."""
-  from train.core.build import brax_evaluator
-  from train.core.group import build_group
-  from train.core.group_evaluator import GroupEvaluator
-  from train.core.group_loop import run_slice
-  from train.core.mesh import to_host
-  from train.core.plan import plan_run
-  t = build_group([plan_run(run.parser().parse_args([*TRAIN_TINY, "--seed", "0", "--out", str(tmp_path / "r")]))])
-  seeds = [0, 3]
-  states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in seeds]))
-  group, alone = GroupEvaluator(t, seeds), [brax_evaluator(t, s) for s in seeds]
-  for _ in range(2):  # each run's key advances as its own evaluator's
-    got = group.evaluate(states)
-    for i in range(len(seeds)):
-      want = alone[i].run_evaluation(to_host(t.learner.policy_params(run_slice(states, i))), training_metrics={})
-      figures = [k for k in want if k.startswith("eval/episode_") or k.endswith("episode_length")]
-      assert len(figures) > 10 and set(figures) <= set(got[i])
-      for k in figures:
-        assert got[i][k] == pytest.approx(want[k], rel=1e-4, abs=1e-6), k
-  assert got[0]["eval/episode_reward"] != got[1]["eval/episode_reward"]

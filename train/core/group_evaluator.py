@@ -11,6 +11,7 @@ import functools
 import time
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 from brax.envs.wrappers.training import EvalWrapper
 from brax.training import acting
@@ -69,7 +70,7 @@ class GroupEvaluator(AllRuns):
       return final.info["eval_metrics"]
 
     self._unroll, self._runs = jax.jit(unroll), runs
-    self._keys = jax.numpy.stack([eval_key(s) for s in seeds])
+    self._keys = jnp.stack([eval_key(s) for s in seeds])
     self._steps, self._walltime = runs * episodes * length, 0.0  # env steps per evaluation; s evaluating
     self._params = t.learner.policy_params
     super().__init__(self.evaluate)
