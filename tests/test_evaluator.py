@@ -13,10 +13,12 @@ import pytest
 
 from helpers import TINY
 from train.core.build import brax_evaluator, build
+from train.core.group import group_evaluations
 from train.core.group_evaluator import GroupEvaluator
-from train.core.group_loop import run_slice
+from train.core.group_loop import RunShare, run_slice
 from train.core.mesh import to_host
 from train.core.plan import plan_run
+from train.core.session import evaluator_of
 from train.run import parser
 
 
@@ -29,11 +31,13 @@ def test_a_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_that_run_
   t = build(dataclasses.replace(plan, preset=dataclasses.replace(plan.preset, num_evals=2, num_eval_envs=4)))
   seeds = [0, 3]
   states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in seeds]))
-  group, alone = GroupEvaluator(t, seeds), [brax_evaluator(t, s) for s in seeds]
+  group = GroupEvaluator(t, seeds)
+  # the single run's evaluator (the plan's seed, 0) and Brax's own for the other
+  alone = [evaluator_of(t), _keeping(brax_evaluator(t, 3), t)]
   for _ in range(2):  # each run's key advances as its own evaluator's
     got = group.evaluate(states)
     for i in range(len(seeds)):
-      want = alone[i].run_evaluation(to_host(t.learner.policy_params(run_slice(states, i))), training_metrics={})
+      want = alone[i](run_slice(states, i))
       assert np.isfinite(want["eval/episode_reward"]) and want["eval/avg_episode_length"] > 0
       assert 0.0 <= want["eval/episode_progress"] <= 1.0 and 0.0 <= want["eval/episode_goal_reached"] <= 1.0
       figures = [k for k in want if k.startswith("eval/episode_") or k.endswith("episode_length")]
@@ -41,3 +45,18 @@ def test_a_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_that_run_
       for k in figures:
         assert got[i][k] == pytest.approx(want[k], rel=1e-4, abs=1e-6), k
   assert got[0]["eval/episode_reward"] != got[1]["eval/episode_reward"]
+
+
+def _keeping(evaluator, t):
+  """evaluate(state) with one Brax evaluator (its key advancing from call to call)."""
+  return lambda state: evaluator.run_evaluation(to_host(t.learner.policy_params(state)), training_metrics={})
+
+
+def test_runs_whose_episodes_share_a_batch_statistic_are_evaluated_each_by_its_own_evaluator(tmp_path):
+  plans = [plan_run(parser().parse_args(["--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", *TINY, *extra,
+                                         "--seed", str(s), "--out", str(tmp_path / f"r{s}")]))
+           for extra in ([], ["--set", "reward.normalize_penalties=true"]) for s in (0, 1)]
+  for pair, shared in ((plans[:2], True), (plans[2:], False)):
+    t = build(dataclasses.replace(pair[0], preset=dataclasses.replace(pair[0].preset, num_evals=2, num_eval_envs=4)))
+    one, each = group_evaluations(t, pair)
+    assert (one is not None) == shared and all(isinstance(e, RunShare) == shared for e in each)

@@ -184,4 +184,3 @@ def test_a_question_for_every_run_is_computed_once_per_update_and_each_run_reads
   assert first.wanted() == "A" and (second(None), first(None)) == ("run 1 of A", "run 0 of A")
   shared.at("B", 20)
   assert first(None) == "run 0 of B" and calls == ["A", "B"]
-

@@ -1,7 +1,7 @@
 """How often do a navigation task's floor obstacles leave no way round them? For scenes drawn as the
 task draws them (uniform, eps = 1), the free-space distance from the spawn to the goal
-(scenes.geodesic: the robot as a disc of radius r) around the wall obstacles alone and around the
-wall and floor obstacles: where the first is finite and the second infinite, the robot can reach
+(scenes.geodesic: the robot as a disc of radius r, not capped by the gap as the task's reward
+caps it) around the wall obstacles alone and around the wall and floor obstacles: where the first is finite and the second infinite, the robot can reach
 the goal only by driving over a floor obstacle on its belts (a collision if anything else touches
 it). Robot 1 is 0.81 m wide (r = 0.41 m: its half-width) and 1.28 m long. Prints a line per r and
 writes JSON with the device, command and date.
@@ -25,10 +25,22 @@ import numpy as np
 from mjx_tracks import atomic
 from mjx_tracks.envs.config import load_config
 from scenes.kinds import scene_kind
-from scenes.navigation import WALL_OBSTACLES
+from scenes.geodesic import geodesic_distance
+from scenes.navigation import AREA_HI, AREA_LO, WALL_OBSTACLES
+
+
+def free_space(states, boxes: int, r: float) -> np.ndarray:
+  """Each scene's shortest path (m; inf: none) from its spawn to its goal around its first `boxes`
+  boxes, for a disc of radius r (m)."""
+  def one(s):
+    lo, hi = s.box_pos[:boxes, :2] - s.box_size[:boxes, :2], s.box_pos[:boxes, :2] + s.box_size[:boxes, :2]
+    return geodesic_distance(s.spawn_pos[:2], s.goal[:2], lo, hi, jnp.array(AREA_LO), jnp.array(AREA_HI), r)
+  return np.asarray(jax.jit(jax.vmap(one))(states))
 
 
 def blocked_shares(task: str, scenes: int, radii: list[float], seed: int = 0) -> list[dict]:
+  """Per radius: the shares of scenes with no way round the floor obstacles where the wall obstacles
+  alone leave one (all areas, hallway, zigzag), and with no way round the wall obstacles alone."""
   cfg = load_config(task)
   scene = scene_kind(cfg.scene.kind).make(cfg.scene)
   if not cfg.scene.nav_floor_obstacles:
@@ -37,9 +49,8 @@ def blocked_shares(task: str, scenes: int, radii: list[float], seed: int = 0) ->
   area = np.asarray(states.variant)  # 0 hallway, 1 zigzag
   rows = []
   for r in radii:
-    def free(boxes, r=r):
-      return np.asarray(jax.jit(jax.vmap(lambda s: scene.free_space_distance(s, s.spawn_pos, boxes=boxes, clearance=r)))(states))
-    walls, both = free(WALL_OBSTACLES), free(WALL_OBSTACLES + cfg.scene.nav_floor_obstacles)
+    walls = free_space(states, WALL_OBSTACLES, r)
+    both = free_space(states, WALL_OBSTACLES + cfg.scene.nav_floor_obstacles, r)
     blocked = np.isfinite(walls) & np.isinf(both)
     rows.append({"radius_m": r, "blocked_by_floor_obstacles": float(blocked.mean()),
                  "hallway": float(blocked[area == 0].mean()), "zigzag": float(blocked[area == 1].mean()),

@@ -1,9 +1,11 @@
-"""For each run of a study: an upper bound on the time from its attempt's start (the process that
-trained it; for packed seeds, the program of all of them) to its first probe with success >= a
-threshold, from the records that came back (STUDY/study.sqlite's attempts, each run's
-RUN/run.sqlite). A probe row's wall_s counts from the run's reporter start, which comes after
-start-up and compilation; that start is at most the run's 'finished' event time less its last
-row's wall_s (the run ends after its last row), so the bound adds that to the probe's wall_s.
+"""For each run of a study: an upper bound on the time from its attempt's start to its first probe
+with success >= a threshold, from the records that came back (STUDY/study.sqlite's attempts, each
+run's RUN/run.sqlite). The attempt's start is stamped when the study hands the run to a worker, so
+the bound includes any wait for a slot and the process's start-up and compilation (for packed
+seeds: the program of all of them). A probe row's wall_s counts from the run's reporter start; that
+start is at most the run's latest 'finished' event time (stored rounded down to the second, hence
++1 s) less its last row's wall_s, since the run ends after its last row. The study's and the
+worker's clocks are assumed the same (one host). A run without a 'finished' event gets no bound.
 
 python scripts/analysis/time_to_probe_success.py results/studies/nav [--threshold 0.9]
 """
@@ -19,15 +21,17 @@ from train.study.executor import cell_folder_of
 
 
 def run_bound(run_db: str, attempt_start: float, threshold: float) -> tuple[int, float] | None:
-  """(step, seconds) of the run's first probe >= threshold, seconds bounded from above; None if none."""
-  with sqlite3.connect(run_db) as c:
+  """(step, seconds) of the run's first probe >= threshold, seconds bounded from above; None if it
+  has none or did not finish (no bound)."""
+  with sqlite3.connect(f"file:{run_db}?mode=ro", uri=True) as c:  # read only: never creates a file
     probes = c.execute("SELECT step, wall_s FROM stats WHERE source = 'probe' AND success_rate >= ? "
                        "ORDER BY step LIMIT 1", (threshold,)).fetchall()
     last_wall = c.execute("SELECT max(wall_s) FROM stats").fetchone()[0]
-    finished = c.execute("SELECT time FROM events WHERE event = 'finished'").fetchone()
+    finished = c.execute("SELECT time FROM events WHERE event = 'finished' ORDER BY time DESC LIMIT 1").fetchone()
   if not probes or finished is None:
     return None
-  reporter_start_at_most = datetime.datetime.fromisoformat(finished[0]).timestamp() - last_wall
+  finished_at_most = datetime.datetime.fromisoformat(finished[0]).timestamp() + 1.0  # s: stored rounded down
+  reporter_start_at_most = finished_at_most - last_wall
   step, wall = probes[0]
   return step, reporter_start_at_most + wall - attempt_start
 
@@ -45,7 +49,7 @@ def main(argv=None) -> int:
       continue
     found = run_bound(run_db, start, args.threshold)
     print(f"{cell}: " + (f"probe success >= {args.threshold} at step {found[0]:,}, at most {found[1]:.0f} s "
-                         "after the attempt's start" if found else f"no probe >= {args.threshold}"))
+                         "after the attempt's start" if found else f"no probe >= {args.threshold}, or not finished (no bound)"))
   return 0
 
 

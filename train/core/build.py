@@ -95,7 +95,7 @@ def compile_update(t: Training, stream=sys.stdout):
 def has_evaluations(t: Training) -> bool:
   """Whether the run's preset asks for Brax's evaluator (its eval/... reports) between updates."""
   p = t.plan.preset
-  return getattr(p, "run_evals", True) and p.num_evals >= 2
+  return bool(getattr(p, "run_evals", True) and p.num_evals >= 2)
 
 
 def eval_env(t: Training):

@@ -4,7 +4,8 @@ its own has: its folder (run.json, checkpoints/, policy/, tb/), its database row
 early stop (a finished run is checkpointed and exported at once, its slot computed and
 discarded from then on), its milestones; `python -m train.run --resume
 RUN` continues any of them alone. Brax's evaluation of every run is one unroll
-(train.core.group_evaluator.GroupEvaluator), the probe of every run one rollout (train.core.probe.GroupProbe)."""
+(train.core.group_evaluator.GroupEvaluator; per run where a batch statistic would couple the runs),
+the probe of every run one rollout (train.core.probe.GroupProbe)."""
 
 from __future__ import annotations
 
@@ -18,12 +19,12 @@ import jax
 import jax.numpy as jnp
 
 from train.core.build import Training, build, has_evaluations
-from train.core.group_evaluator import GroupEvaluator
+from train.core.group_evaluator import GroupEvaluator, evaluations_shared
 from train.core.group_loop import GroupLoop, Member
 from train.core.plan import RunError, RunPlan
 from train.core.probe import GroupProbe
 from train.core.progress import Reporter
-from train.core.session import SessionOptions, checkpointer_of, finish_run, schedule_of
+from train.core.session import SessionOptions, checkpointer_of, evaluator_of, finish_run, schedule_of
 
 
 class Prefixed:
@@ -119,6 +120,18 @@ def prepare_group(plans: list[RunPlan]) -> Training:
   return t
 
 
+def group_evaluations(t: Training, plans: list[RunPlan]) -> tuple[GroupEvaluator | None, list]:
+  """(the shared evaluation or None, each run's evaluate(state) or None): every run's Brax evaluation
+  in one unroll where their episodes share no statistic (evaluations_shared), else each run's own
+  evaluator in turn."""
+  if not has_evaluations(t):
+    return None, [None] * len(plans)
+  if not evaluations_shared(t.plan.cfg):
+    return None, [evaluator_of(t, p.seed) for p in plans]
+  shared = GroupEvaluator(t, [p.seed for p in plans])
+  return shared, [shared.member(i) for i in range(len(plans))]
+
+
 def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOptions = SessionOptions(),
                 on_end: Callable[[int, dict], None] = lambda i, summary: None) -> list[dict[str, Any]]:
   """Trains the runs (t: prepare_group's) as one program until their total steps, early stops or a
@@ -127,10 +140,9 @@ def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOpt
   run's summary (as train.core.session.train)."""
   states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(p.seed) for p in plans]))
   update = compile_group(t, len(plans))
-  # every run's Brax evaluation in one unroll, every run's probe in one rollout
-  evaluate = GroupEvaluator(t, [p.seed for p in plans]) if has_evaluations(t) else None
-  probe = GroupProbe(t) if any(p.probe_every for p in plans) else None
-  parts = [_member(t, p, db, (evaluate and evaluate.member(i), probe and probe.member(i)), options,
+  evaluate, evaluations = group_evaluations(t, plans)
+  probe = GroupProbe(t) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
+  parts = [_member(t, p, db, (evaluations[i], probe and probe.member(i)), options,
                    lambda summary, i=i: on_end(i, summary)) for i, p in enumerate(plans)]
   shared = [s for s in (evaluate, probe) if s is not None]
 

@@ -2,8 +2,11 @@
 `brax.training.acting.Evaluator` plays for each run (num_eval_envs episodes of uniform scenes,
 deterministic policy, reset keys from the run's own key sequence, which starts at
 train.core.build.eval_key(seed)), all runs' episodes in one batch, block i played by run i's
-policy; each run gets the metrics Brax's evaluator would report for it. Before, a program's runs
-were evaluated one after another (20 one-robot SAC runs: 20 evaluations of 10 episodes each)."""
+policy; each run gets the episode metrics Brax's evaluator would report for it (the timing
+metrics, eval/epoch_eval_time, eval/sps, eval/walltime, are the program's). Only where the runs'
+episodes do not share a statistic: with reward.normalize_penalties the eval env's penalty
+normalizer learns from the whole batch, so a program's runs are then evaluated each by its own
+evaluator (`evaluations_shared`)."""
 
 from __future__ import annotations
 
@@ -36,12 +39,18 @@ def group_policy(make_policy, params, runs: int):
   return policy
 
 
+def evaluations_shared(cfg) -> bool:
+  """Whether the runs of a program may share one evaluation batch: no statistic learnt from the
+  batch (the penalty normalizer, reward.normalize_penalties) then couples their episodes."""
+  return not cfg.reward.normalize_penalties
+
+
 def episode_metrics(eval_metrics, runs: int) -> list[dict[str, float]]:
   """Each run's eval/... metrics from the episodes' (block i: run i's), as Brax's evaluator
   aggregates one run's (acting.Evaluator.run_evaluation: means and stds over the episodes,
   '..._per_step' sums divided by the episode's length)."""
   steps = np.asarray(eval_metrics.episode_steps).reshape(runs, -1)
-  sums = {k: np.asarray(v).reshape(runs, -1) for k, v in eval_metrics.episode_metrics.items()}
+  sums = {k: np.asarray(v).reshape((runs, -1) + np.shape(v)[1:]) for k, v in eval_metrics.episode_metrics.items()}
   out = []
   for i in range(runs):
     lengths = np.maximum(steps[i], 1.0).astype(float)
@@ -66,12 +75,13 @@ class GroupEvaluator(AllRuns):
     def unroll(params, unroll_keys):
       resets = jax.vmap(lambda k: jax.random.split(k, episodes))(unroll_keys)  # each run's own, as Brax's
       first = env.reset(resets.reshape((runs * episodes,) + resets.shape[2:]))
+      # the policy is deterministic: the acting key (run 0's) is not read
       final, _ = acting.generate_unroll(env, first, group_policy(make, params, runs), unroll_keys[0], length)
       return final.info["eval_metrics"]
 
     self._unroll, self._runs = jax.jit(unroll), runs
     self._keys = jnp.stack([eval_key(s) for s in seeds])
-    self._steps, self._walltime = runs * episodes * length, 0.0  # env steps per evaluation; s evaluating
+    self._steps, self._walltime = runs * episodes * length, 0.0  # the program's env steps per evaluation; s evaluating
     self._params = t.learner.policy_params
     super().__init__(self.evaluate)
 

@@ -57,9 +57,9 @@ def _restore(t: Training, ckpts: RunCheckpoints) -> tuple[Any, int]:
   return from_host(host, t.shardings), int(meta["step"])  # below the total: plan_run checked the newest
 
 
-def evaluator_of(t: Training):
-  """evaluate(state) -> Brax evaluation metrics, or None."""
-  ev = make_evaluator(t, t.plan.seed)
+def evaluator_of(t: Training, seed: int | None = None):
+  """evaluate(state) -> Brax evaluation metrics of a run of seed `seed` (default: the plan's), or None."""
+  ev = make_evaluator(t, t.plan.seed if seed is None else seed)
   if ev is None:
     return None
   return lambda state: ev.run_evaluation(to_host(t.learner.policy_params(state)), training_metrics={})
