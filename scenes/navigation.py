@@ -18,7 +18,13 @@ y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2): every spawn is >= 0.8 m from the walls and t
 or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
 Floor obstacles (`floor_obstacles` of them): low boxes to drive over or around, each
 centred at x ~ U(2.5, 9.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
-height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays.
+height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays. With
+`floor_passage` = p > 0 (scene.nav_floor_passage) the layout is conditioned on a way round: up to
+FLOOR_TRIES layouts are drawn and the first with a free-space path from the spawn to the goal
+around the wall and floor obstacles, for a disc of radius min(p, C / 2 - GAP_MARGIN), is kept;
+where none has one (1.1 % of the scenes at p = 0.5 m), the floor obstacles are left out of that scene (parked
+off the area). Without it (p = 0) 12 % of the scenes with 6 obstacles have no way round for a disc
+of robot 1's half-width (scripts/analysis/nav_floor_blocking.py): the robot must cross a box.
 Free-space distance (episode.distance: geodesic): the shortest path to the goal around the two wall
 obstacles keeping r = min(scene.nav_clearance, C / 2 - GAP_MARGIN) from them and from the walls
 (scenes.geodesic; r = 0.4 m, robot 1's half-width, follows corners as tightly as the robot's width
@@ -48,6 +54,8 @@ WALL_THICKNESS = 0.3  # m, zigzag walls
 OBSTACLE_HEIGHT = 1.0  # m
 FLOOR_X, FLOOR_Y, FLOOR_SIDE = (START_X + 0.5, GOAL_X - 0.5), (-AREA_W / 2 + 0.5, AREA_W / 2 - 0.5), (0.3, 0.8)  # m
 MAX_FLOOR_OBSTACLES = 12
+FLOOR_TRIES = 4  # floor layouts drawn per scene where a way round them is asked for (floor_passage)
+NAV_FLOOR_PASSAGE_LIMITS = (0.0, 1.0)  # m, what scene.nav_floor_passage may ask (0: no condition)
 WALL_OBSTACLES = 2  # the first scene boxes: the hallway's or zigzag's obstacles; floor obstacles follow
 WALLS = ("wall_left", "wall_right", "wall_back", "wall_front")  # the area's wall planes (geom names)
 NAV_CLEARANCE_LIMITS = (0.3, 1.0)  # m, what scene.nav_clearance may ask (robot 1: half-width 0.39, half-diagonal 0.75)
@@ -78,6 +86,7 @@ class NavScene:
   floor_height: tuple[float, float]  # m, their height ~ U(min, max)
   gap: tuple[float, float]  # m, C ~ U(min, max)
   clearance: float  # m, the free-space path's distance from walls and obstacles (module docstring)
+  floor_passage: float = 0.0  # m, radius of the disc that must find a way round the floor obstacles (0: none asked)
 
   def __post_init__(self):
     if not self.kinds or any(k not in NAV_AREAS for k in self.kinds):
@@ -135,9 +144,28 @@ class NavScene:
     goal = (jnp.array([_lerp(10.5, 11.5, g[0]), _lerp(-4.0, 4.0, g[1]), 0.085]) if self.random_goal
             else jnp.array([11.0, 0.0, 0.085]))
     if self.floor_obstacles:
-      f_pos, f_size = self.floor_boxes(jax.random.fold_in(key, 1))
+      f_pos, f_size = self.passable_floor(key, pos[:, :2], size[:, :2], spawn, goal, c)
       pos, size = jnp.concatenate([pos, f_pos]), jnp.concatenate([size, f_size])
     return SceneState(pos, size, jnp.zeros(pos.shape[0]), spawn, yaw, goal, jnp.float32(0.0), xi, variant.astype(jnp.int32))
+
+  def passable_floor(self, key, wall_pos, wall_size, spawn, goal, gap) -> tuple[jax.Array, jax.Array]:
+    """The floor obstacles' centres and half-sizes (m): the first draw, or with floor_passage the
+    first of FLOOR_TRIES draws with a way round (module docstring), else none (parked off the area)."""
+    if not self.floor_passage:
+      return self.floor_boxes(jax.random.fold_in(key, 1))
+    f_pos, f_size = jax.vmap(lambda j: self.floor_boxes(jax.random.fold_in(key, 1 + j)))(jnp.arange(FLOOR_TRIES))
+    r = jnp.minimum(self.floor_passage, gap / 2 - GAP_MARGIN)
+
+    def way_round(fp, fs):
+      lo = jnp.concatenate([wall_pos - wall_size, fp[:, :2] - fs[:, :2]])
+      hi = jnp.concatenate([wall_pos + wall_size, fp[:, :2] + fs[:, :2]])
+      return jnp.isfinite(geodesic_distance(spawn[:2], goal[:2], lo, hi, jnp.array(AREA_LO), jnp.array(AREA_HI), r))
+    ok = jax.vmap(way_round)(f_pos, f_size)
+    pick = jnp.argmax(ok)  # the first draw with a way round (0 where none has one)
+    parked = jnp.stack([-20.0 - 3.0 * (WALL_OBSTACLES + jnp.arange(self.floor_obstacles)),
+                        jnp.zeros(self.floor_obstacles), jnp.full(self.floor_obstacles, -5.0)], -1)  # as world_xml's
+    keep = jnp.any(ok)
+    return jnp.where(keep, f_pos[pick], parked), jnp.where(keep, f_size[pick], jnp.full_like(f_size[0], 0.1))
 
   def collision_geoms(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """(geoms no part of the robot may touch, geoms only the track belts may touch): the walls and

@@ -35,7 +35,9 @@ EXERCISED_KEYS = {"task", "scene.sampler", "reward.kind", "scene.direction", "sc
                   "scene.nav_gap"}  # hidden rays: tests/test_randomization.py compiles every randomization path;
 #                     held-out terrains and areas are evaluation scenes; a gap range is a constant of nav's code
 DATA_PREFIXES = ("scene.terrain.",)  # a terrain kind's ranges: the sampler's data (its box pool is scenes.terrain.POOL)
-SIZE_KEYS = {"scene.steps", "scene.nav_floor_obstacles", "randomization.enabled"}  # traced here: shapes or state change
+# traced here: shapes or state change, or a code path of its own (a floor layout's way round:
+# tests/test_nav_floor_passage.py compiles it)
+SIZE_KEYS = {"scene.steps", "scene.nav_floor_obstacles", "randomization.enabled", "scene.nav_floor_passage"}
 
 
 @functools.lru_cache(maxsize=None)

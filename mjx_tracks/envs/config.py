@@ -25,7 +25,7 @@ from mjx_tracks.bounds import bound, violation
 from mjx_tracks.envs.randomization import RandomizationConfig
 from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
-from scenes.navigation import MAX_FLOOR_OBSTACLES, NAV_CLEARANCE_LIMITS, NAV_GAP_LIMITS
+from scenes.navigation import MAX_FLOOR_OBSTACLES, NAV_CLEARANCE_LIMITS, NAV_FLOOR_PASSAGE_LIMITS, NAV_GAP_LIMITS
 from scenes.terrain_kinds import TERRAIN_PARAMS
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
@@ -219,6 +219,7 @@ class SceneConfig:
   nav_floor_height: tuple[float, float]  # m, nav: their height ~ U(min, max)
   nav_gap: tuple[float, float]  # m, nav: the gap C between the wall obstacles ~ U(min, max) (hard: narrow)
   nav_clearance: float = dataclasses.field(metadata=bound(*NAV_CLEARANCE_LIMITS))  # m, nav: the free-space path's distance from walls
+  nav_floor_passage: float = dataclasses.field(metadata=bound(*NAV_FLOOR_PASSAGE_LIMITS))  # m, nav: disc radius with a way round the floor obstacles (0: none asked)
   terrains: tuple[str, ...]  # terrain: the kinds drawn per episode (scenes.terrain)
   terrain: TerrainRanges  # every terrain kind's parameter ranges
   random_spawn: bool
@@ -617,6 +618,7 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("evaluation", "held_out_nav"): FROM_DEFAULTS,  # evaluation only: old runs get today's
               ("scene", "nav_gap"): [1.0, 2.0],  # before the gap setting: the original's U(1, 2) m
               ("scene", "nav_clearance"): 0.4,  # before the setting: robot 1's half-width
+              ("scene", "nav_floor_passage"): 0.0,  # before the setting: floor obstacles drawn regardless
               ("reward", "progress_form"): "closest",  # before potential shaping: the paper's closest distance
               ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines

@@ -12,7 +12,7 @@ class Nav(SceneKind):
   camera = "overhead"
   signals = ("pitch_rate", "collision")
   distances = ("euclidean", "geodesic")
-  parameters = "scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height"
+  parameters = "scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height, scene.nav_floor_passage"
 
   def validate(self, cfg) -> None:
     from mjx_tracks.envs.config import require  # noqa: PLC0415
@@ -33,7 +33,7 @@ class Nav(SceneKind):
   def make(self, s):
     from scenes.navigation import NavScene  # noqa: PLC0415
     return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,
-                    s.nav_floor_height, s.nav_gap, s.nav_clearance)
+                    s.nav_floor_height, s.nav_gap, s.nav_clearance, s.nav_floor_passage)
 
   def suite(self, cfg) -> list[str]:
     areas = cfg.scene.nav_kinds

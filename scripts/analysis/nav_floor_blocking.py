@@ -7,7 +7,7 @@ it). Robot 1 is 0.81 m wide (r = 0.41 m: its half-width) and 1.28 m long. Prints
 writes JSON with the device, command and date.
 
 python scripts/analysis/nav_floor_blocking.py --task nav-obstacles --scenes 4000 --radii 0.41,0.5,0.64 \
-    --out results/nav/floor-blocking-cpu.json
+    [--set scene.nav_floor_passage=0] --out results/nav/floor-blocking-cpu.json
 """
 
 from __future__ import annotations
@@ -38,10 +38,10 @@ def free_space(states, boxes: int, r: float) -> np.ndarray:
   return np.asarray(jax.jit(jax.vmap(one))(states))
 
 
-def blocked_shares(task: str, scenes: int, radii: list[float], seed: int = 0) -> list[dict]:
+def blocked_shares(task: str, scenes: int, radii: list[float], overrides=(), seed: int = 0) -> list[dict]:
   """Per radius: the shares of scenes with no way round the floor obstacles where the wall obstacles
   alone leave one (all areas, hallway, zigzag), and with no way round the wall obstacles alone."""
-  cfg = load_config(task)
+  cfg = load_config(task, list(overrides))
   scene = scene_kind(cfg.scene.kind).make(cfg.scene)
   if not cfg.scene.nav_floor_obstacles:
     raise SystemExit(f"error: {task} draws no floor obstacles")
@@ -63,15 +63,16 @@ def main(argv=None) -> int:
   p.add_argument("--task", default="nav-obstacles")
   p.add_argument("--scenes", type=int, default=4000)
   p.add_argument("--radii", default="0.41,0.5,0.64", help="disc radii (m), comma-separated")
+  p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a task config override")
   p.add_argument("--out", help="JSON file to write")
   args = p.parse_args(argv)
-  rows = blocked_shares(args.task, args.scenes, [float(r) for r in args.radii.split(",")])
+  rows = blocked_shares(args.task, args.scenes, [float(r) for r in args.radii.split(",")], args.set)
   for row in rows:
     print(f"r = {row['radius_m']} m: no way round the floor obstacles in {row['blocked_by_floor_obstacles']:.3f} of "
           f"the scenes (hallway {row['hallway']:.3f}, zigzag {row['zigzag']:.3f}); walls alone "
           f"{row['blocked_by_walls_alone']:.3f}")
   if args.out:
-    record = {"task": args.task, "scenes": args.scenes, "rows": rows, "device": f"{jax.devices()[0]} ({platform.node()})",
+    record = {"task": args.task, "overrides": args.set, "scenes": args.scenes, "rows": rows, "device": f"{jax.devices()[0]} ({platform.node()})",
               "command": "python " + " ".join(sys.argv), "date": datetime.datetime.now(datetime.timezone.utc).isoformat()}
     atomic.write_json(args.out, record)
   return 0
