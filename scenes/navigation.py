@@ -69,6 +69,25 @@ UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) *
 # hardest: obstacles jutting furthest and longest, the narrowest gap C
 
 
+PARKED_HALF = 0.1  # m, half-size of a box parked off the area (world_xml's initial boxes, left-out floor obstacles)
+
+
+def parked_xyz(k):
+  """Where scene box k is parked off the area (m): below the floor, apart from the others."""
+  return -20 - 3 * k, 0, -5
+
+
+def gap_capped(r, gap):
+  """A path's distance from walls and obstacles (m), at most what the area's gap C allows."""
+  return jnp.minimum(r, gap / 2 - GAP_MARGIN)
+
+
+def path_around(start, goal, box_pos, box_size, r):
+  """Length (m; inf: none) of the shortest path from start to goal (x, y) in the area around the
+  boxes (centres and half-sizes, (k, 2) m), keeping r (m) from them and from the walls (scenes.geodesic)."""
+  return geodesic_distance(start, goal, box_pos - box_size, box_pos + box_size, jnp.array(AREA_LO), jnp.array(AREA_HI), r)
+
+
 def _lerp(a, b, u):
   return a + (b - a) * u
 
@@ -99,7 +118,8 @@ class NavScene:
   def world_xml(self) -> str:
     w = world_geom_attrs()
     h = AREA_W / 2
-    boxes = "\n".join(f'<geom name="{SCENE_BOX}{k}" type="box" pos="{-20 - 3 * k} 0 -5" size="0.1 0.1 0.1" '
+    p = PARKED_HALF
+    boxes = "\n".join(f'<geom name="{SCENE_BOX}{k}" type="box" pos="{" ".join(map(str, parked_xyz(k)))}" size="{p} {p} {p}" '
                       f'{w} rgba=".6 .4 .3 1"/>' for k in range(2 + self.floor_obstacles))
     return f"""
     <geom name="floor" type="plane" size="0 0 1" {w} rgba=".5 .55 .5 1"/>
@@ -154,18 +174,16 @@ class NavScene:
     if not self.floor_passage:
       return self.floor_boxes(jax.random.fold_in(key, 1))
     f_pos, f_size = jax.vmap(lambda j: self.floor_boxes(jax.random.fold_in(key, 1 + j)))(jnp.arange(FLOOR_TRIES))
-    r = jnp.minimum(self.floor_passage, gap / 2 - GAP_MARGIN)
+    r = gap_capped(self.floor_passage, gap)
 
     def way_round(fp, fs):
-      lo = jnp.concatenate([wall_pos - wall_size, fp[:, :2] - fs[:, :2]])
-      hi = jnp.concatenate([wall_pos + wall_size, fp[:, :2] + fs[:, :2]])
-      return jnp.isfinite(geodesic_distance(spawn[:2], goal[:2], lo, hi, jnp.array(AREA_LO), jnp.array(AREA_HI), r))
+      return jnp.isfinite(path_around(spawn[:2], goal[:2], jnp.concatenate([wall_pos, fp[:, :2]]),
+                                      jnp.concatenate([wall_size, fs[:, :2]]), r))
     ok = jax.vmap(way_round)(f_pos, f_size)
     pick = jnp.argmax(ok)  # the first draw with a way round (0 where none has one)
-    parked = jnp.stack([-20.0 - 3.0 * (WALL_OBSTACLES + jnp.arange(self.floor_obstacles)),
-                        jnp.zeros(self.floor_obstacles), jnp.full(self.floor_obstacles, -5.0)], -1)  # as world_xml's
+    parked = jnp.array([parked_xyz(WALL_OBSTACLES + i) for i in range(self.floor_obstacles)], jnp.float32)
     keep = jnp.any(ok)
-    return jnp.where(keep, f_pos[pick], parked), jnp.where(keep, f_size[pick], jnp.full_like(f_size[0], 0.1))
+    return jnp.where(keep, f_pos[pick], parked), jnp.where(keep, f_size[pick], jnp.full_like(f_size[0], PARKED_HALF))
 
   def collision_geoms(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """(geoms no part of the robot may touch, geoms only the track belts may touch): the walls and
@@ -179,11 +197,9 @@ class NavScene:
     (module docstring); around the first `boxes` scene boxes (WALL_OBSTACLES + floor_obstacles: the
     floor obstacles too) and keeping `clearance` (m, default scene.nav_clearance) where given, the
     clearance capped alike."""
-    pos_b, size_b = scene.box_pos[:boxes, :2], scene.box_size[:boxes, :2]
     wanted = self.clearance if clearance is None else clearance
-    clearance = jnp.minimum(wanted, scene.xi[4] / 2 - GAP_MARGIN)  # xi[4]: this area's gap C
-    return geodesic_distance(pos[:2], scene.goal[:2], pos_b - size_b, pos_b + size_b,
-                             jnp.array(AREA_LO), jnp.array(AREA_HI), clearance)
+    return path_around(pos[:2], scene.goal[:2], scene.box_pos[:boxes, :2], scene.box_size[:boxes, :2],
+                       gap_capped(wanted, scene.xi[4]))  # xi[4]: this area's gap C
 
   def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the

@@ -25,16 +25,13 @@ import numpy as np
 from mjx_tracks import atomic
 from mjx_tracks.envs.config import load_config
 from scenes.kinds import scene_kind
-from scenes.geodesic import geodesic_distance
-from scenes.navigation import AREA_HI, AREA_LO, WALL_OBSTACLES
+from scenes.navigation import WALL_OBSTACLES, path_around
 
 
 def free_space(states, boxes: int, r: float) -> np.ndarray:
   """Each scene's shortest path (m; inf: none) from its spawn to its goal around its first `boxes`
   boxes, for a disc of radius r (m)."""
-  def one(s):
-    lo, hi = s.box_pos[:boxes, :2] - s.box_size[:boxes, :2], s.box_pos[:boxes, :2] + s.box_size[:boxes, :2]
-    return geodesic_distance(s.spawn_pos[:2], s.goal[:2], lo, hi, jnp.array(AREA_LO), jnp.array(AREA_HI), r)
+  one = lambda s: path_around(s.spawn_pos[:2], s.goal[:2], s.box_pos[:boxes, :2], s.box_size[:boxes, :2], r)  # noqa: E731
   return np.asarray(jax.jit(jax.vmap(one))(states))
 
 
