@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+from mjx_tracks.envs.config import load_config
 from mjx_tracks.metrics import EPISODE_NAMES
 from train import evaluate
 from train.db import ExperimentDB
@@ -102,3 +103,14 @@ def test_the_compile_estimate_is_the_longest_compilation_seen(tmp_path, monkeypa
   for seconds in (42.0, 11.0, 3.0):
     compile_cache.record_compile_seconds("ppo/cpu", seconds)
   assert compile_cache.last_compile_seconds("ppo/cpu") == 42.0
+
+
+def test_train_evaluate_takes_several_scenes_each_once_and_refuses_them_beside_the_suite():
+  cfg = load_config("nav")
+  args = evaluate.parser().parse_args(["r", "--scene", "nav/hallway", "--scene", "nav/zigzag", "--scene", "nav/hallway"])
+  assert evaluate._jobs(args, cfg)[0] == ["nav/hallway", "nav/zigzag"]  # argparse once kept only the last
+  assert evaluate._jobs(evaluate.parser().parse_args(["r"]), load_config("asc-inc-cog"))[0] == ["hardest"]
+  with pytest.raises(ValueError, match="give one of them"):
+    evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--suite"]), cfg)
+  with pytest.raises(ValueError, match="one scene"):
+    evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--scene", "nav/zigzag", "--out", "x"]), cfg)

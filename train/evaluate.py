@@ -112,10 +112,10 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                  help="with --baseline: a config override of the task (as train.run's)")
   p.add_argument("--trials", type=int, default=EVAL_TRIALS)
-  p.add_argument("--scene", help=f"one of {', '.join(SCENES)}, {HELD_OUT}NAME "
+  p.add_argument("--scene", action="append", help=f"one of {', '.join(SCENES)}, {HELD_OUT}NAME "
                  f"(a fixed configuration of the task's evaluation section), {HARDEST}KIND (a terrain kind "
                  f"alone), {NAV}AREA (a navigation area alone) or BASE+CASE (a robustness case); default hardest; "
-                 "--suite lists a task's")
+                 "repeat it for several (one process, each written to its own report); --suite lists a task's")
   p.add_argument("--suite", action="store_true", help="every scene of the task's evaluation suite "
                  "(hardest, uniform, each held-out staircase or terrain kind) instead of --scene")
   p.add_argument("--robustness", action="store_true", help="the robustness suite (evaluation.robustness): the "
@@ -221,8 +221,9 @@ def _jobs(args, cfg: TaskConfig) -> tuple[list[str], list[str], list[int | None]
   """(scenes, base scenes of the robustness suite: every case on each in one batch, milestone
   budgets with None for the final policy) to evaluate; ValueError on bad input."""
   if args.scene is not None and (args.suite or args.robustness):
-    raise ValueError("--scene names one scene; --suite and --robustness name theirs: give one of them")
-  scenes = suite_scenes(cfg) if args.suite else [] if args.robustness else [args.scene or "hardest"]
+    raise ValueError("--scene names scenes; --suite and --robustness name theirs: give one of them")
+  named = list(dict.fromkeys(args.scene or ["hardest"]))  # each once, in order
+  scenes = suite_scenes(cfg) if args.suite else [] if args.robustness else named
   for scene in scenes + (robustness_scenes(cfg) if args.robustness else []):
     scene_config(cfg, scene)  # ConfigError on an unknown scene
   if args.robustness and (args.out or args.video):
