@@ -7,6 +7,7 @@ import io
 import json
 import os
 import pathlib
+import shutil
 import signal
 import threading
 import time
@@ -20,7 +21,7 @@ from mjx_tracks.envs.config import ConfigError
 from train.db import ExperimentDB
 
 from train.study.cluster import local_cluster
-from train.study.executor import STUDY_DB, StudyRunner, cell_folder, next_attempt
+from train.study.executor import STUDY_DB, StudyRunner, cell_folder, next_attempt, starts_afresh
 from train.study.spec import cells, study_from_dict
 from train.study.report import write_report
 from train.study.status import summary
@@ -309,3 +310,24 @@ def test_a_brax_run_is_evaluated_again_only_once_trained_and_else_trained_from_t
   assert next_attempt(ours, str(run), [{"phase": "evaluate"}]) == (False, True)  # ours needs checkpoints
   (run / "checkpoints" / "64").mkdir(parents=True)
   assert next_attempt(ours, str(run), [{"phase": "evaluate"}]) == (True, False)
+
+
+def test_runs_a_study_stop_cut_off_before_a_checkpoint_are_packed_again(tmp_path):
+  """A pack cut off by the machine going back (attempts 'stopped', no phase) and no checkpoint come
+  back: its runs start afresh, so they are packed again (each ran alone before: 5 x 300 s instead of
+  one program); a checkpoint, an ended attempt or a folder of unknown origin keeps a run alone."""
+  spec = study_from_dict({**STUDY, "groups": [{**STUDY["groups"][0], "pack_seeds": True}]})
+  cell = cells(spec)[0]
+  folder = tmp_path / "run"
+  cut = {"started": 1.0, "ended": None, "rc": None, "phase": None, "stopped": True}
+  assert starts_afresh(cell, [], str(folder))  # never tried
+  assert starts_afresh(cell, [cut, cut], str(folder))  # cut off twice, nothing came back
+  (folder / "tb").mkdir(parents=True)
+  assert not starts_afresh(cell, [], str(folder))  # a folder without any attempt: not the study's own
+  assert starts_afresh(cell, [cut], str(folder))  # what a cut-off attempt left, without a checkpoint
+  (folder / "checkpoints" / "200").mkdir(parents=True)
+  assert not starts_afresh(cell, [cut], str(folder))  # resumes from its checkpoint
+  shutil.rmtree(folder)
+  failed = {"started": 1.0, "ended": 2.0, "rc": 1, "phase": "train", "pack": ["x"]}
+  drained = {**failed, "rc": 143, "stopped": True}  # SIGTERM: its run saved and came back
+  assert not starts_afresh(cell, [failed], str(folder)) and not starts_afresh(cell, [cut, drained], str(folder))

@@ -61,6 +61,18 @@ def next_attempt(cell: Cell, run_folder: str, ended: list[dict]) -> tuple[bool, 
   return has_run, not (cell.is_baseline or has_run and (evaluated or _trained_to_the_end(run_folder)))
 
 
+def starts_afresh(cell: Cell, attempts: list[dict], run_folder: str) -> bool:
+  """Whether a cell's next attempt starts from nothing, so that it may go into a pack of seeds: it
+  has had no attempt and has no run folder, or every attempt it had was cut off by the study's own
+  stop (the machine went back, the study was killed) and left nothing to resume from (no
+  checkpoint came back). A cell with its own ended attempt (a failure, a pack's crash) or a
+  checkpoint resumes alone."""
+  if not attempts:
+    return not os.path.exists(run_folder)
+  cut_off = all(a.get("stopped") and not a.get("phase") for a in attempts)
+  return cut_off and not next_attempt(cell, run_folder, [])[0]
+
+
 def read_cells(folder: str) -> dict:
   """STUDY/state.json's cells as last saved; FileNotFoundError if the folder holds no study."""
   return json.load(open(os.path.join(folder, STATE)))["cells"]
@@ -168,7 +180,8 @@ class StudyRunner:
   def _submit_pack(self, cids: list[str]):
     """Fresh cells that differ only in their seed, trained as one program (train.run --seeds)."""
     cells = [self.cells[cid] for cid in cids]
-    for cid in cids:
+    for cid in cids:  # a folder here is what a cut-off attempt left (no checkpoint): the pack replaces it
+      shutil.rmtree(cell_folder(self.folder, self.cells[cid]), ignore_errors=True)
       self._begin(cid)
       self.state.cells[cid]["attempts"][-1]["pack"] = cids
     key = f"{cids[0]}/attempt-{len(self.state.cells[cids[0]]['attempts'])}+{len(cids) - 1}"
@@ -179,9 +192,10 @@ class StudyRunner:
     return future
 
   def _submit_all(self, cids: list[str]) -> list:
-    """Submits the cells: fresh cells of a group that packs seeds go as one pack per set of seeds."""
+    """Submits the cells: cells starting afresh of a group that packs seeds go as one pack per set of
+    seeds (again after a study's stop cut their pack off)."""
     fresh = [self.cells[cid] for cid in cids
-             if not self.state.cells[cid]["attempts"] and not os.path.exists(cell_folder(self.folder, self.cells[cid]))]
+             if starts_afresh(self.cells[cid], self.state.cells[cid]["attempts"], cell_folder(self.folder, self.cells[cid]))]
     packs = [[c.id for c in p] for p in packs_of(fresh)]
     packed = {cid for p in packs for cid in p}
     return [self._submit_pack(p) for p in packs] + [self._submit(cid) for cid in cids if cid not in packed]
