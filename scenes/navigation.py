@@ -44,7 +44,7 @@ from scenes import samplers
 from scenes.geodesic import geodesic_distance
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
-from scenes.world import SCENE_BOX, world_geom_attrs
+from scenes.world import PARKED_HALF, SCENE_BOX, parked_box_xml, parked_xyz, world_geom_attrs
 
 AREA_W = 10.0  # m, W
 OBSTACLE_L = 8.0  # m, L
@@ -67,14 +67,6 @@ NAV_AREAS = ("hallway", "zigzag")  # the area kinds (scene.nav_kinds)
 UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
               integer=(False,) * 5, hard=("high", "high", "high", "high", "low"))
 # hardest: obstacles jutting furthest and longest, the narrowest gap C
-
-
-PARKED_HALF = 0.1  # m, half-size of a box parked off the area (world_xml's initial boxes, left-out floor obstacles)
-
-
-def parked_xyz(k):
-  """Where scene box k is parked off the area (m): below the floor, apart from the others."""
-  return -20 - 3 * k, 0, -5
 
 
 def gap_capped(r, gap):
@@ -118,9 +110,7 @@ class NavScene:
   def world_xml(self) -> str:
     w = world_geom_attrs()
     h = AREA_W / 2
-    p = PARKED_HALF
-    boxes = "\n".join(f'<geom name="{SCENE_BOX}{k}" type="box" pos="{" ".join(map(str, parked_xyz(k)))}" size="{p} {p} {p}" '
-                      f'{w} rgba=".6 .4 .3 1"/>' for k in range(2 + self.floor_obstacles))
+    boxes = "\n".join(parked_box_xml(k, ".6 .4 .3 1") for k in range(2 + self.floor_obstacles))
     return f"""
     <geom name="floor" type="plane" size="0 0 1" {w} rgba=".5 .55 .5 1"/>
     <geom name="wall_left" type="plane" pos="0 {h} 0" zaxis="0 -1 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>

@@ -21,7 +21,7 @@ from scenes import samplers
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
 from scenes.terrain_kinds import MAX_STEPS, STAIRS
-from scenes.world import SCENE_BOX, world_geom_attrs
+from scenes.world import PARKED_HALF, parked_box_xml, parked_xyz, world_geom_attrs
 
 N_MAX = 7  # the reference's n_max: the paper's longest staircase (the default pool)
 WIDTH = 2.0  # m, between the side walls
@@ -30,7 +30,6 @@ GOAL_PAST_EDGE = 1.0  # m, ascent goal past the top step edge; descent goal befo
 GOAL_ABOVE_TREAD = 0.085  # m
 GOAL_HALFWIDTH = WIDTH / 2  # m: the goal is a line across the staircase (see StairScene.sample)
 SPAWN_BEFORE_STAIRS = 1.0  # m, ascent spawn in front of the first riser
-PARK = (-50.0, 0.0, -10.0)  # m, where unused boxes go
 
 
 @struct.dataclass
@@ -53,9 +52,7 @@ def world_xml(n_max: int = N_MAX, walls: bool = True) -> str:
   """Floor, side walls (planes at y = +-WIDTH/2; none if not walls) and the pool of step boxes."""
   world = world_geom_attrs()
   half = WIDTH / 2
-  steps = "\n".join(
-      f'<geom name="{SCENE_BOX}{k}" type="box" pos="{PARK[0] - k} {PARK[1]} {PARK[2]}" '
-      f'size="0.1 0.1 0.1" {world} rgba=".7 .7 .65 1"/>' for k in range(n_max))
+  steps = "\n".join(parked_box_xml(k, ".7 .7 .65 1") for k in range(n_max))
   # planes' normals point into the corridor (a plane's normal is its local +z)
   side = f"""
     <geom name="wall_left" type="plane" pos="0 {half} 0" zaxis="0 -1 0" size="0 0 1" {world} rgba=".6 .6 .7 .3"/>
@@ -90,10 +87,10 @@ def boxes_from_treads(treads: jax.Array, riser: jax.Array, steps: jax.Array) -> 
 
 
 def park_unused(pos: jax.Array, size: jax.Array, used: jax.Array) -> tuple[jax.Array, jax.Array]:
-  """Boxes where used, else small boxes parked far below the floor, 3 m apart."""
+  """Boxes where used, else small boxes at their parking spots (scenes.world.parked_xyz)."""
   k = jnp.arange(pos.shape[0], dtype=pos.dtype)
-  parked_pos = jnp.array(PARK) + jnp.stack([-3.0 * k, 0 * k, 0 * k], axis=-1)
-  return jnp.where(used[:, None], pos, parked_pos), jnp.where(used[:, None], size, 0.1)
+  parked_pos = jnp.stack(jnp.broadcast_arrays(*parked_xyz(k)), axis=-1).astype(pos.dtype)
+  return jnp.where(used[:, None], pos, parked_pos), jnp.where(used[:, None], size, PARKED_HALF)
 
 
 def ascent_goal(stairs: Staircase) -> jax.Array:
