@@ -17,7 +17,9 @@
 # The study runs from a copy of the tree made at its start (/tmp/studies/src-$STUDY), so later calls, which
 # bring the working tree again, never change the code of a study under way.
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.
-# Usage: [STUDY=paper] WAIT=560 SLOTS_PER_GPU=2 CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu/study.sh [ARGS]
+# Usage: [STUDY=paper] WAIT=560 [SLOTS_PER_GPU=1] CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu/study.sh [ARGS]
+# Programs side by side on one GPU time-slice it (8 SAC packs at once: each 14x slower than alone;
+# two 5-seed PPO packs: nothing finished in 18 min): keep SLOTS_PER_GPU=1 unless runs are tiny.
 set -uo pipefail
 export PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 export XLA_FLAGS="--xla_cpu_multi_thread_eigen=false"  # many one-robot CPU runs side by side: one thread each
