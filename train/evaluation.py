@@ -97,6 +97,16 @@ def add_step(acc: dict, state, active):
           "final_pos": jnp.where(active[:, None], state.pipeline_state.data.qpos[:, :3], acc["final_pos"])}
 
 
+def trial_starts(core, keys, eps: float, perturbations=None, draw=None):
+  """Every trial's first state, as an evaluation draws it: `core.reset_at` of each trial's key at
+  difficulty eps with the penalty normalizer at 1 (nothing learnt), each trial's perturbation and
+  the scene draw where given (train.onnx_drive and scripts/analysis draw the same trials)."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+  reset = jax.vmap(core.reset_at, in_axes=(0, None, None, 0, None))
+  return reset(keys, jnp.float32(eps), jnp.float32(1.0), perturbations, draw)
+
+
 def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=lambda s: s.obs, core=None):
   """(core, rollout): the task env and a pure rollout(params, keys[, perturbations[, draw]]) ->
   (sums, qpos of trial 0 per step, trial 0's scene), one episode per trial from
@@ -112,8 +122,7 @@ def trial_rollout(cfg: TaskConfig, make_act, trials: int, eps: float, observe=la
 
   def rollout(params, keys, perturbations=None, draw=None):
     act = make_act(params)
-    reset = jax.vmap(core.reset_at, in_axes=(0, None, None, 0, None))
-    s = reset(keys, jnp.float32(eps), jnp.float32(1.0), perturbations, draw)
+    s = trial_starts(core, keys, eps, perturbations, draw)
 
     def body(carry, _):
       s, acc, active = carry

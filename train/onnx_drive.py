@@ -24,11 +24,10 @@ def drive(cfg, choose, trials: int, seed: int) -> dict:
   import jax.numpy as jnp  # noqa: PLC0415
 
   from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
-  from train.evaluation import EVAL_EPS, add_step, per_trial_figures, start_sums, trial_keys  # noqa: PLC0415
+  from train.evaluation import EVAL_EPS, add_step, per_trial_figures, start_sums, trial_keys, trial_starts  # noqa: PLC0415
   core = TrackedRobotEnv(cfg)
-  reset = jax.jit(jax.vmap(core.reset_at, in_axes=(0, None, None)))
   step, add = jax.jit(jax.vmap(core.step)), jax.jit(add_step)
-  s = reset(trial_keys(trials, seed), jnp.float32(EVAL_EPS), jnp.float32(1.0))
+  s = jax.jit(lambda keys: trial_starts(core, keys, EVAL_EPS))(trial_keys(trials, seed))
   acc, active = start_sums(s, trials), np.ones(trials, bool)
   for _ in range(cfg.episode.max_steps):
     action = np.asarray(choose(np.asarray(s.obs, np.float32)), np.float32)

@@ -22,15 +22,14 @@ import platform
 import sys
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from mjx_tracks import atomic
 from mjx_tracks.envs.config import from_dict
 from mjx_tracks.envs.task_env import TrackedRobotEnv
-from scenes.navigation import AREA_LEN, AREA_W, NAV_AREAS, WALL_OBSTACLES
+from scenes.navigation import AREA_HI, AREA_LO, NAV_AREAS, WALL_OBSTACLES
 from train.core.run_record import read_run_record
-from train.evaluation import EVAL_EPS, EVAL_SEED, scene_programs, trial_keys
+from train.evaluation import EVAL_EPS, EVAL_SEED, scene_programs, trial_keys, trial_starts
 
 KINDS = ("floor obstacle", "wall obstacle", "outer wall")
 
@@ -48,8 +47,8 @@ def trial_scenes(cfg, area: str, trials: int):
   """The trials' scene states (batched SceneState) of `area` as train.evaluate draws them."""
   (program, draws), = scene_programs(cfg, [area])
   core = TrackedRobotEnv(program)
-  reset = jax.jit(jax.vmap(core.reset_at, in_axes=(0, None, None, None, None)))
-  return reset(trial_keys(trials, EVAL_SEED), jnp.float32(EVAL_EPS), jnp.float32(1.0), None, draws[area]).pipeline_state.scene
+  starts = jax.jit(lambda keys: trial_starts(core, keys, EVAL_EPS, None, draws[area]))
+  return starts(trial_keys(trials, EVAL_SEED)).pipeline_state.scene
 
 
 def sites(run_dir: str, area: str, check_radius: float) -> dict | None:
@@ -68,7 +67,7 @@ def sites(run_dir: str, area: str, check_radius: float) -> dict | None:
     raise SystemExit(f"error: {run_dir} {area}: a successful trial ends {miss.max():.2f} m from its scene's goal: "
                      "these are not the evaluation's scenes")
   box = footprint_distance(end, scene.box_pos[..., :2], scene.box_size[..., :2], scene.box_yaw)
-  outer = np.minimum.reduce([end[:, 0], AREA_LEN - end[:, 0], AREA_W / 2 - end[:, 1], end[:, 1] + AREA_W / 2])
+  outer = np.minimum(end - np.array(AREA_LO), np.array(AREA_HI) - end).min(axis=1)  # to the nearest wall plane
   floor = box[:, WALL_OBSTACLES:].min(axis=1) if box.shape[1] > WALL_OBSTACLES else np.full(len(end), np.inf)
   near = np.stack([floor, box[:, :WALL_OBSTACLES].min(axis=1), outer], axis=-1)  # (trials, 3)
   hit = per["collided"] > 0
