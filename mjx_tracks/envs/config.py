@@ -158,6 +158,7 @@ class ObservationConfig:
   noise: float = dataclasses.field(metadata=bound(0.0, 1.0, hi_open=True))  # fraction of rays hidden
   scan_rays: int = dataclasses.field(metadata=bound(1, 360))  # N_s, the laser scan's rays (part "scan")
   scan_range: float = dataclasses.field(metadata=bound(0.5, 30.0))  # m, a scan ray's reading where it hits nothing
+  scan_pitches: tuple[float, ...]  # rad, the scan's rings, each pitched down from the chassis plane (0: horizontal)
 
   def validate(self, key: str) -> None:
     from mjx_tracks.envs.observations import PARTS  # noqa: PLC0415
@@ -166,6 +167,8 @@ class ObservationConfig:
     require(len(set(self.parts)) == len(self.parts), f"{key}.parts", "has duplicates")
     require(min(self.rays_per_band) >= 1, f"{key}.rays_per_band", "must be >= 1")
     require(0 <= self.depth_range[0] < self.depth_range[1], f"{key}.depth_range", "needs 0 <= min < max")
+    require(1 <= len(self.scan_pitches) <= 8 and all(0.0 <= p < 1.5 for p in self.scan_pitches),
+            f"{key}.scan_pitches", f"needs 1-8 rings pitched down 0 <= p < 1.5 rad, got {list(self.scan_pitches)}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -626,7 +629,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("randomization",): FROM_DEFAULTS,  # before sim-to-real randomization: off (enabled: false)
               ("evaluation", "robustness"): FROM_DEFAULTS,  # evaluation only: old runs get today's
               ("observation", "scan_rays"): FROM_DEFAULTS,  # before the laser scan: read only by its part,
-              ("observation", "scan_range"): FROM_DEFAULTS}  #   which no older run observes
+              ("observation", "scan_range"): FROM_DEFAULTS,  #   which no older run observes
+              ("observation", "scan_pitches"): [0.0]}  # before scan rings: the horizontal scan alone
 
 
 def _with_added_keys(raw: dict) -> dict:

@@ -29,7 +29,7 @@ class Sensors:
   goal: jax.Array  # (3,) m
   vertical_beams: jax.Array  # (N_v,) m
   horizontal_beams: jax.Array  # (N_h,) m
-  scan: jax.Array  # (N_s,) m, the 2D laser scan (mjx_tracks.envs.scan)
+  scan: jax.Array  # (rings x N_s,) m, the laser scan (mjx_tracks.envs.scan)
 
   @staticmethod
   def spec(n_joints: int, n_vertical: int, n_horizontal: int, n_scan: int) -> "Sensors":
@@ -75,7 +75,7 @@ PARTS: dict[str, ObsPart] = {
     "angular_velocity": ObsPart("chassis angular velocity (rad/s)", lambda s, r: s.angular_velocity),
     "vertical_beams": ObsPart("vertical depth beams (m)", lambda s, r: s.vertical_beams),
     "horizontal_beams": ObsPart("horizontal depth beams (m)", lambda s, r: s.horizontal_beams),
-    "scan": ObsPart("2D laser scan around the chassis, ray k at yaw 2 pi k / N_s (m)", lambda s, r: s.scan),
+    "scan": ObsPart("laser scan around the chassis, ray j N_s + k at yaw 2 pi k / N_s in ring j (m)", lambda s, r: s.scan),
 }
 
 

@@ -85,7 +85,8 @@ class TrackedRobotEnv(Env):
         o.vertical_beams if "vertical_beams" in o.parts else 0,
         o.horizontal_beams if "horizontal_beams" in o.parts else 0,
         o.band_px, o.rays_per_band, o.depth_range, self.robot.camera_range[1], o.noise)
-    self.scan = ScanLayout(o.scan_rays if "scan" in o.parts else 0, o.scan_range, self.robot.lidar_pos)
+    self.scan = ScanLayout(o.scan_rays if "scan" in o.parts else 0, o.scan_range, self.robot.lidar_pos,
+                           tuple(o.scan_pitches))
     self.rand = cfg.randomization
     self.randomized = cfg.randomization.enabled or every_path  # the state carries a RobustState
     self.acting = frozenset(g for g in rnd.GROUPS if every_path or cfg.randomization.acts(g))  # costly paths compiled
@@ -93,7 +94,7 @@ class TrackedRobotEnv(Env):
     c = cfg.scene.curriculum
     self.curriculum = Curriculum(window=c.window, rule=c.rule)
     self.part_sizes = part_sizes(o.parts, self.robot, self.beams.n_vertical, self.beams.n_horizontal,
-                                 self.scan.n_rays)
+                                 self.scan.size)
 
   # --- Brax Env interface -------------------------------------------------------------------
   @property
@@ -258,7 +259,7 @@ class TrackedRobotEnv(Env):
     beams = (depth_beams(self.beams, m, d, self.sim.layout.camera_site, key, **real)
              if self.beams.n_features else jnp.zeros(0))
     ranges = (scan_ranges(self.scan, m, d, self.sim.layout.chassis_body, jax.random.fold_in(key, 5),
-                   real.get("range_noise"), real.get("hidden")) if self.scan.n_rays else jnp.zeros(0))
+                   real.get("range_noise"), real.get("hidden")) if self.scan.size else jnp.zeros(0))
     rot = d.xmat[self.sim.layout.chassis_body]
     rpy, rate, velocity, joints = chassis_rpy(d.qpos), d.qvel[3:6], rot.T @ d.qvel[0:3], d.qpos[self.sim.layout.joint_qpos]
     if r is not None:  # what the robot's sensors read
