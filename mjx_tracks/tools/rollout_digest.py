@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import os
 import sys
 
 N_ENVS, N_STEPS, EPISODE_STEPS, SEED = 4, 12, 5, 0
@@ -58,7 +59,8 @@ def rollout_digest(task: str) -> str:
 def main(argv=None) -> int:
   p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
   g = p.add_mutually_exclusive_group(required=True)
-  g.add_argument("--write", metavar="JSON", help="record every task's digest in JSON")
+  g.add_argument("--write", metavar="JSON", help="record every task's digest in JSON (with --tasks: those "
+                 "tasks' digests, the file's others kept where it was recorded on this platform and packages)")
   g.add_argument("--check", metavar="JSON", help="compare every task's digest with JSON's")
   p.add_argument("--tasks", nargs="+", default=TASKS, help="a subset of the tasks")
   args = p.parse_args(argv)
@@ -83,6 +85,8 @@ def main(argv=None) -> int:
     differ += [task] if same == " DIFFERS" else []
     print(f"{task:15s} {digests[task][:16]}{same}", file=sys.stderr, flush=True)
   if args.write:
+    kept = _kept_digests(args.write, here, versions) if set(args.tasks) != set(TASKS) else {}
+    digests = {t: digests.get(t, kept.get(t)) for t in TASKS if t in digests or t in kept}
     record = {"what": __doc__.split("\n\n")[0], "command": "python -m mjx_tracks.tools.rollout_digest --write " + args.write,
               "device": here, "jax": jax.__version__, "versions": versions,
               "n_envs": N_ENVS, "n_steps": N_STEPS, "episode_steps": EPISODE_STEPS, "seed": SEED, "digests": digests}
@@ -92,6 +96,19 @@ def main(argv=None) -> int:
   if differ:
     print(f"differ: {', '.join(differ)}", file=sys.stderr)
   return 1 if differ else 0
+
+
+def _kept_digests(path: str, here: str, versions: dict) -> dict[str, str]:
+  """The digests recorded in `path` (none where it is absent); exits 2 where it was recorded on
+  another platform or packages, whose digests cannot stand beside this one's."""
+  if not os.path.exists(path):
+    return {}
+  old = json.load(open(path))
+  if old.get("device") != here or old.get("versions") != versions:
+    print(f"error: {path} was recorded on {old.get('device')} with {old.get('versions')}, this is {here} with "
+          f"{versions}: record every task (--write without --tasks)", file=sys.stderr)
+    sys.exit(2)
+  return old["digests"]
 
 
 def _versions() -> dict[str, str]:
