@@ -1,11 +1,11 @@
 """2D navigation: hallway or zigzag (each with probability 1/2) with two wall obstacles.
 
-Area: x in [0, 12] m (start area [0, 2], obstacle area [2, 10], goal area [10, 12]),
-y in [-W/2, W/2] with W = 10 m, closed by four wall planes. xi = (W1, L1, W2, L2, C), with the
+Area: x in [0, A] m with A = 12 (scene.nav_length; start area [0, 2], obstacle area [2, A - 2],
+goal area [A - 2, A]), y in [-W/2, W/2] with W = 10 m, closed by four wall planes. xi = (W1, L1, W2, L2, C), with the
 gap C ~ U(C_min, C_max) (scene.nav_gap; the original's U(1, 2) m, 1 + U(0, 1)):
   hallway: obstacle 1 juts W1 ~ U(W/2 - C/2, W - C) from the left wall, obstacle 2 juts
            W2 ~ U(0, W - C - W1) from the right wall, so the hallway between them is >= C wide;
-           both run L_i ~ U(L/2, L) along x (L = 8 m) from random points of the obstacle area.
+           both run L_i ~ U(L/2, L) along x (L = A - 4 m) from random points of the obstacle area.
   zigzag:  two thin walls across the corridor, obstacle 1 from the left wall at x = 2 + L/3,
            obstacle 2 from the right wall at x = 2 + 2L/3, each W_i ~ U(W/2 - C/2, W - C)
            long, so the robot must weave; L_i is their thickness (0.3 m).
@@ -15,9 +15,9 @@ y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2): every spawn is >= 0.8 m from the walls and t
 (x >= 2 m), so a robot that cannot reverse can always turn in place (the circle robot 1 sweeps:
 0.62 m at rest, 0.75 m with its arm stretched flat ahead; x ~ U(0.75, 1.5) until 2026-11-25 put
 3 % of the hallway spawns within 0.75 m of an obstacle, some facing into it). Goal: fixed (11, 0),
-or random x ~ U(10.5, 11.5), y ~ U(-4, 4).
+or random x ~ U(A - 1.5, A - 0.5), y ~ U(-4, 4) (with A = 12: (11, 0), U(10.5, 11.5)).
 Floor obstacles (`floor_obstacles` of them): low boxes to drive over or around, each
-centred at x ~ U(2.5, 9.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
+centred at x ~ U(2.5, A - 2.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and
 height ~ U(h_min, h_max) (`floor_height`); drawn per episode, kept in the scene's box arrays. With
 `floor_passage` = p > 0 (scene.nav_floor_passage) the layout is conditioned on a way round: up to
 FLOOR_TRIES layouts are drawn and the first with a free-space path from the spawn to the goal
@@ -47,12 +47,12 @@ from scenes.scene import SceneState
 from scenes.world import PARKED_HALF, SCENE_BOX, parked_box_xml, parked_xyz, world_geom_attrs
 
 AREA_W = 10.0  # m, W
-OBSTACLE_L = 8.0  # m, L
-START_X, GOAL_X, AREA_LEN = 2.0, 10.0, 12.0  # m
+START_X, AREA_LEN = 2.0, 12.0  # m: where the obstacle area starts, the area's length A (default)
+NAV_LENGTH_LIMITS = (AREA_LEN, 30.0)  # m, what scene.nav_length may ask
 NAV_GAP_LIMITS = (0.85, 3.0)  # m, what scene.nav_gap may ask: robot 1 is 0.81 m wide
 WALL_THICKNESS = 0.3  # m, zigzag walls
 OBSTACLE_HEIGHT = 1.0  # m
-FLOOR_X, FLOOR_Y, FLOOR_SIDE = (START_X + 0.5, GOAL_X - 0.5), (-AREA_W / 2 + 0.5, AREA_W / 2 - 0.5), (0.3, 0.8)  # m
+FLOOR_Y, FLOOR_SIDE = (-AREA_W / 2 + 0.5, AREA_W / 2 - 0.5), (0.3, 0.8)  # m (x: NavScene.floor_x)
 MAX_FLOOR_OBSTACLES = 12
 FLOOR_TRIES = 4  # floor layouts drawn per scene where a way round them is asked for (floor_passage)
 NAV_FLOOR_PASSAGE_LIMITS = (0.0, 1.0)  # m, what scene.nav_floor_passage may ask (0: no condition)
@@ -62,7 +62,7 @@ NAV_CLEARANCE_LIMITS = (0.3, 1.0)  # m, what scene.nav_clearance may ask (robot 
 GAP_MARGIN = 0.02  # m, a path through a gap C keeps at most C / 2 - GAP_MARGIN from its sides
 SPAWN_X = (0.8, 1.2)  # m, random spawns' x range (module docstring: room to turn in place)
 SPAWN_Y = (-4.0, 4.0)  # m, random spawns' y range
-AREA_LO, AREA_HI = (0.0, -AREA_W / 2), (AREA_LEN, AREA_W / 2)  # m, the area's corners (x, y)
+AREA_LO, AREA_HI = (0.0, -AREA_W / 2), (AREA_LEN, AREA_W / 2)  # m, the default area's corners (x, y)
 NAV_AREAS = ("hallway", "zigzag")  # the area kinds (scene.nav_kinds)
 UNIT = Ranges(names=("W1", "L1", "W2", "L2", "C"), low=(0.0,) * 5, high=(1.0,) * 5,
               integer=(False,) * 5, hard=("high", "high", "high", "high", "low"))
@@ -74,10 +74,12 @@ def gap_capped(r, gap):
   return jnp.minimum(r, gap / 2 - GAP_MARGIN)
 
 
-def path_around(start, goal, box_pos, box_size, r):
-  """Length (m; inf: none) of the shortest path from start to goal (x, y) in the area around the
-  boxes (centres and half-sizes, (k, 2) m), keeping r (m) from them and from the walls (scenes.geodesic)."""
-  return geodesic_distance(start, goal, box_pos - box_size, box_pos + box_size, jnp.array(AREA_LO), jnp.array(AREA_HI), r)
+def path_around(start, goal, box_pos, box_size, r, length: float = AREA_LEN):
+  """Length (m; inf: none) of the shortest path from start to goal (x, y) in the area of this length
+  (m) around the boxes (centres and half-sizes, (k, 2) m), keeping r (m) from them and from the walls
+  (scenes.geodesic)."""
+  return geodesic_distance(start, goal, box_pos - box_size, box_pos + box_size, jnp.array(AREA_LO),
+                           jnp.array((length, AREA_HI[1])), r)
 
 
 def _lerp(a, b, u):
@@ -98,6 +100,17 @@ class NavScene:
   gap: tuple[float, float]  # m, C ~ U(min, max)
   clearance: float  # m, the free-space path's distance from walls and obstacles (module docstring)
   floor_passage: float = 0.0  # m, radius of the disc that must find a way round the floor obstacles (0: none asked)
+  length: float = AREA_LEN  # m, the area's length A along x
+
+  @property
+  def obstacle_length(self) -> float:
+    """L (m): the obstacle area's length."""
+    return self.length - 2 * START_X
+
+  @property
+  def floor_x(self) -> tuple[float, float]:
+    """m, the range of the floor obstacles' centres along x."""
+    return START_X + 0.5, self.length - START_X - 0.5
 
   def __post_init__(self):
     if not self.kinds or any(k not in NAV_AREAS for k in self.kinds):
@@ -116,7 +129,7 @@ class NavScene:
     <geom name="wall_left" type="plane" pos="0 {h} 0" zaxis="0 -1 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
     <geom name="wall_right" type="plane" pos="0 {-h} 0" zaxis="0 1 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
     <geom name="wall_back" type="plane" pos="0 0 0" zaxis="1 0 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
-    <geom name="wall_front" type="plane" pos="{AREA_LEN} 0 0" zaxis="-1 0 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
+    <geom name="wall_front" type="plane" pos="{self.length} 0 0" zaxis="-1 0 0" size="0 0 1" {w} rgba=".6 .6 .7 .3"/>
     {boxes}"""
 
   def sample(self, key: jax.Array, eps: jax.Array, draw: samplers.Draw | None = None) -> SceneState:
@@ -130,14 +143,15 @@ class NavScene:
     half_w = AREA_W / 2
     # hallway
     w2_h = _lerp(0.0, AREA_W - c - w1, u[2])
-    l1, l2 = _lerp(OBSTACLE_L / 2, OBSTACLE_L, u[1]), _lerp(OBSTACLE_L / 2, OBSTACLE_L, u[3])
-    x1 = START_X + jax.random.uniform(k_x, (2,)) * (OBSTACLE_L - jnp.stack([l1, l2]))
+    big_l = self.obstacle_length
+    l1, l2 = _lerp(big_l / 2, big_l, u[1]), _lerp(big_l / 2, big_l, u[3])
+    x1 = START_X + jax.random.uniform(k_x, (2,)) * (big_l - jnp.stack([l1, l2]))
     hall_pos = jnp.array([[x1[0] + l1 / 2, half_w - w1 / 2, 0.0], [x1[1] + l2 / 2, -half_w + w2_h / 2, 0.0]])
     hall_size = jnp.array([[l1 / 2, w1 / 2, 0.0], [l2 / 2, w2_h / 2, 0.0]])
     # zigzag
     w2_z = _lerp(AREA_W / 2 - c / 2, AREA_W - c, u[2])
-    zig_pos = jnp.array([[START_X + OBSTACLE_L / 3, half_w - w1 / 2, 0.0],
-                         [START_X + 2 * OBSTACLE_L / 3, -half_w + w2_z / 2, 0.0]])
+    zig_pos = jnp.array([[START_X + big_l / 3, half_w - w1 / 2, 0.0],
+                         [START_X + 2 * big_l / 3, -half_w + w2_z / 2, 0.0]])
     zig_size = jnp.array([[WALL_THICKNESS / 2, w1 / 2, 0.0], [WALL_THICKNESS / 2, w2_z / 2, 0.0]])
     zig = variant == 1
     pos = jnp.where(zig, zig_pos, hall_pos).at[:, 2].set(OBSTACLE_HEIGHT / 2)
@@ -151,8 +165,9 @@ class NavScene:
     else:
       spawn, yaw = jnp.array([1.0, 0.0, 0.0]), jnp.float32(0.0)
     g = jax.random.uniform(k_g, (2,))
-    goal = (jnp.array([_lerp(10.5, 11.5, g[0]), _lerp(-4.0, 4.0, g[1]), 0.085]) if self.random_goal
-            else jnp.array([11.0, 0.0, 0.085]))
+    a = self.length
+    goal = (jnp.array([_lerp(a - 1.5, a - 0.5, g[0]), _lerp(-4.0, 4.0, g[1]), 0.085]) if self.random_goal
+            else jnp.array([a - 1.0, 0.0, 0.085]))
     if self.floor_obstacles:
       f_pos, f_size = self.passable_floor(key, pos[:, :2], size[:, :2], spawn, goal, c)
       pos, size = jnp.concatenate([pos, f_pos]), jnp.concatenate([size, f_size])
@@ -168,7 +183,7 @@ class NavScene:
 
     def way_round(fp, fs):
       return jnp.isfinite(path_around(spawn[:2], goal[:2], jnp.concatenate([wall_pos, fp[:, :2]]),
-                                      jnp.concatenate([wall_size, fs[:, :2]]), r))
+                                      jnp.concatenate([wall_size, fs[:, :2]]), r, self.length))
     ok = jax.vmap(way_round)(f_pos, f_size)
     pick = jnp.argmax(ok)  # the first draw with a way round (0 where none has one)
     parked = jnp.array([parked_xyz(WALL_OBSTACLES + i) for i in range(self.floor_obstacles)], jnp.float32)
@@ -189,13 +204,13 @@ class NavScene:
     clearance capped alike."""
     wanted = self.clearance if clearance is None else clearance
     return path_around(pos[:2], scene.goal[:2], scene.box_pos[:boxes, :2], scene.box_size[:boxes, :2],
-                       gap_capped(wanted, scene.xi[4]))  # xi[4]: this area's gap C
+                       gap_capped(wanted, scene.xi[4]), self.length)  # xi[4]: this area's gap C
 
   def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the
     module docstring)."""
     u = jax.random.uniform(key, (self.floor_obstacles, 5))
     height = _lerp(*self.floor_height, u[:, 4])
-    pos = jnp.stack([_lerp(*FLOOR_X, u[:, 0]), _lerp(*FLOOR_Y, u[:, 1]), height / 2], axis=-1)
+    pos = jnp.stack([_lerp(*self.floor_x, u[:, 0]), _lerp(*FLOOR_Y, u[:, 1]), height / 2], axis=-1)
     size = jnp.stack([_lerp(*FLOOR_SIDE, u[:, 2]) / 2, _lerp(*FLOOR_SIDE, u[:, 3]) / 2, height / 2], axis=-1)
     return pos, size

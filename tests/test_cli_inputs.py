@@ -114,3 +114,17 @@ def test_train_evaluate_takes_several_scenes_each_once_and_refuses_them_beside_t
     evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--suite"]), cfg)
   with pytest.raises(ValueError, match="one scene"):
     evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--scene", "nav/zigzag", "--out", "x"]), cfg)
+
+
+def test_a_trained_run_is_evaluated_on_held_out_scenes_added_since_but_never_on_another_task(capsys):
+  """A run recorded before `evaluation.held_out_nav` entries had a length (12 m then) loads as it
+  trained; `--set evaluation.*` adds what it is evaluated on; any other key is one line, exit 2."""
+  run_dir = os.path.join(ROOT, "results", "studies", "nav", "runs", "ppo_nav_6000000_s0")  # trained 2026-11-26
+  raw = json.load(open(os.path.join(run_dir, "run.json")))["config"]
+  assert all("length" not in h for h in raw["evaluation"]["held_out_nav"])
+  assert [h.length for h in evaluate.recorded_config(raw).evaluation.held_out_nav] == [12.0, 12.0]
+  longer = evaluate.recorded_config(raw, ["evaluation.held_out_nav=[{name: long-area, gap: [1.0, 2.0], "
+                                          "floor_obstacles: 0, length: 18.0}]"])
+  assert [(h.name, h.length) for h in longer.evaluation.held_out_nav] == [("long-area", 18.0)]
+  assert "held-out/long-area" in evaluate.suite_scenes(longer)
+  _one_line_error(capsys, evaluate_main([run_dir, "--set", "reward.goal_bonus=3"]), "only evaluation.* keys")

@@ -122,7 +122,7 @@ def test_nav_suites_evaluate_each_area_kind_alone():
   from train.evaluation import scene_config, suite_scenes
   cfg = load_config("nav")
   held_out = [f"held-out/{h.name}" for h in cfg.evaluation.held_out_nav]
-  assert held_out == ["held-out/narrow-gap", "held-out/dense-obstacles"]
+  assert held_out == ["held-out/narrow-gap", "held-out/dense-obstacles", "held-out/long-area"]
   assert suite_scenes(cfg) == ["uniform", "nav/hallway", "nav/zigzag", *held_out]
   assert suite_scenes(load_config("nav", ["scene.nav_kinds=[zigzag]"])) == ["uniform", *held_out]
   for variant, kind in enumerate(("hallway", "zigzag")):
@@ -166,7 +166,7 @@ def test_a_recorded_nav_config_from_before_collision_safety_loads_with_the_paper
   cfg = from_dict(raw)
   assert (cfg.reward.progress_form, cfg.reward.collision_penalty, cfg.episode.distance) == ("closest", 0.0, "euclidean")
   assert not cfg.episode.end_on_collision and tuple(cfg.scene.nav_gap) == (1.0, 2.0)
-  assert [h.name for h in cfg.evaluation.held_out_nav] == ["narrow-gap", "dense-obstacles"]
+  assert [h.name for h in cfg.evaluation.held_out_nav] == ["narrow-gap", "dense-obstacles", "long-area"]  # today's
 
 
 def test_declared_ranges_are_what_validation_checks_and_what_the_form_shows():

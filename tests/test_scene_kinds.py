@@ -73,7 +73,8 @@ def test_held_out_navigation_areas_narrow_the_gap_or_add_obstacles_and_stay_pass
   from mjx_tracks.envs.task_env import make_scene
   cfg = load_config("nav")
   kind = scene_kind("nav")
-  assert [s for s in kind.suite(cfg) if s.startswith("held-out/")] == ["held-out/narrow-gap", "held-out/dense-obstacles"]
+  assert [s for s in kind.suite(cfg) if s.startswith("held-out/")] == ["held-out/narrow-gap", "held-out/dense-obstacles",
+                                                                       "held-out/long-area"]
   narrow, dense = (make_scene(kind.pinned(cfg, f"held-out/{n}").scene) for n in ("narrow-gap", "dense-obstacles"))
   assert dense.floor_obstacles == 12 and narrow.floor_obstacles == 0
   s = jax.vmap(narrow.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 200), 0.5)
@@ -81,9 +82,34 @@ def test_held_out_navigation_areas_narrow_the_gap_or_add_obstacles_and_stay_pass
   free = jax.vmap(narrow.free_space_distance)(s, s.spawn_pos)
   assert np.isfinite(np.asarray(free)).all()  # a path for the robot's clearance remains
   with pytest.raises(ConfigError, match=r"evaluation.held_out_nav\[0\].gap: needs 0.85"):
-    load_config("nav", ["evaluation.held_out_nav=[{name: slit, gap: [0.5, 0.5], floor_obstacles: 0}]"])
+    load_config("nav", ["evaluation.held_out_nav=[{name: slit, gap: [0.5, 0.5], floor_obstacles: 0, length: 12}]"])
   with pytest.raises(ConfigError, match="held-out areas"):
     kind.pinned(cfg, "held-out/middle")
+
+
+def test_a_longer_held_out_area_moves_its_obstacles_goal_and_front_wall_and_lengthens_the_episode():
+  import jax
+  import mujoco
+  import numpy as np
+  from mjx_tracks.envs.task_env import TrackedRobotEnv
+  cfg = load_config("nav-obstacles")
+  long_cfg = scene_kind("nav").pinned(cfg, "held-out/long-area")
+  assert long_cfg.scene.nav_length == 18.0 and long_cfg.episode.max_steps == 360  # 240 x 18 / 12
+  env = TrackedRobotEnv(long_cfg)
+  s = jax.vmap(env.scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 200), 1.0)
+  goal, lo, hi = np.asarray(s.goal), np.asarray(s.box_pos - s.box_size), np.asarray(s.box_pos + s.box_size)
+  assert (goal[:, 0] >= 16.5).all() and (goal[:, 0] <= 17.5).all() and goal[:, 0].max() > 17.3  # U(A - 1.5, A - 0.5)
+  walls = slice(0, 2)  # the wall obstacles stay in the obstacle area [2, A - 2] and reach past the 12 m area's
+  assert (lo[:, walls, 0] >= 2 - 1e-5).all() and (hi[:, walls, 0] <= 16 + 1e-5).all() and hi[:, walls, 0].max() > 12
+  zig = np.asarray(s.variant) == 1  # zigzag walls at 2 + L/3 and 2 + 2L/3, L = A - 4 = 14 m
+  np.testing.assert_allclose(np.asarray(s.box_pos[zig, :2, 0]), np.broadcast_to([2 + 14 / 3, 2 + 28 / 3], (zig.sum(), 2)), atol=1e-5)
+  assert np.isfinite(np.asarray(jax.vmap(env.scene.free_space_distance)(s, s.spawn_pos))).all()
+  data = mujoco.MjData(env.sim.mj_model)  # the compiled world: a ray along +x from x = 17 m meets the front wall 1 m on
+  mujoco.mj_forward(env.sim.mj_model, data)
+  dist = mujoco.mj_ray(env.sim.mj_model, data, np.array([17.0, 0.0, 0.5]), np.array([1.0, 0.0, 0.0]),
+                       np.array([1, 0, 0, 0, 0, 0], np.uint8), 1, -1, np.zeros(1, np.int32))
+  np.testing.assert_allclose(dist, 1.0, atol=1e-6)
+  assert scene_kind("nav").pinned(cfg, "held-out/narrow-gap").episode.max_steps == 240  # same length: same episode
 
 
 def test_each_kind_names_the_scene_its_probes_and_success_early_stops_run_on():

@@ -23,12 +23,13 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import functools
 import os
 import sys
 
 from mjx_tracks import atomic
 from mjx_tracks.baselines import ALGO as BASELINE_ALGO, BASELINES, baseline
-from mjx_tracks.envs.config import ConfigError, TaskConfig, available_tasks, from_dict, load_config
+from mjx_tracks.envs.config import ConfigError, TaskConfig, apply_override, available_tasks, from_dict, load_config
 from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
@@ -51,6 +52,16 @@ def _policy(run_dir: str, checkpoint: str | None, milestone: int | None = None):
     raise ValueError(f"--checkpoint takes a step number (or nothing, for the latest), got {checkpoint!r}")
   spec, params, step = load_checkpoint_params(run_dir, None if checkpoint == "latest" else int(checkpoint))
   return act_from_params(spec), params, step
+
+
+def recorded_config(raw: dict, evaluation_sets=()) -> TaskConfig:
+  """A run's recorded config, with `--set evaluation.KEY=VALUE` overrides of what it is evaluated on
+  (e.g. held-out scenes added since it trained); any other key would change the task it learnt."""
+  for item in evaluation_sets:
+    if not item.startswith("evaluation."):
+      raise ValueError(f"--set {item}: with a trained run only evaluation.* keys may change (its task is what it "
+                       "trained on)")
+  return from_dict(functools.reduce(apply_override, evaluation_sets, raw))
 
 
 def _baseline_policy(name: str, cfg: TaskConfig):
@@ -110,7 +121,8 @@ def parser() -> argparse.ArgumentParser:
                  "a trained one (mjx_tracks.baselines)")
   p.add_argument("--task", help="with --baseline: the task")
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                 help="with --baseline: a config override of the task (as train.run's)")
+                 help="with --baseline: a config override of the task (as train.run's); with a run: of its "
+                 "evaluation.* keys (e.g. held-out scenes added since it trained)")
   p.add_argument("--trials", type=int, default=EVAL_TRIALS)
   p.add_argument("--scene", action="append", help=f"one of {', '.join(SCENES)}, {HELD_OUT}NAME "
                  f"(a fixed configuration of the task's evaluation section), {HARDEST}KIND (a terrain kind "
@@ -150,7 +162,8 @@ def _evaluate(args, meta: dict, scenes: list[str], budgets: list[int | None], cf
   policies, observe = _policies(args, budgets, cfg0)
   run = trial_runner(cfg0, scenes, policies[budgets[0]][0], args.trials, args.eps, args.seed, bool(args.video), observe)
   for scene in scenes:
-    print(f"{scene}: running {args.trials} trials of up to {cfg0.episode.max_steps} steps ({len(budgets)} "
+    steps = scene_config(cfg0, scene).episode.max_steps  # a held-out area may be longer than the task's
+    print(f"{scene}: running {args.trials} trials of up to {steps} steps ({len(budgets)} "
           f"polic{'y' if len(budgets) == 1 else 'ies'}; compiling first where no scene before it shares its "
           "program: a minute or more the first time on this machine) ...", file=sys.stderr, flush=True)
     for budget, (_, params, policy_step) in policies.items():
@@ -253,12 +266,12 @@ def main(argv: list[str] | None = None) -> int:
   try:
     if args.baseline:
       meta = _baseline_record(args)
-    elif args.run_dir is None or args.task or args.set:
+    elif args.run_dir is None or args.task:
       raise ValueError("give a RUN_DIR to evaluate a trained run (its config is recorded), or --baseline NAME "
                        "--task TASK [--set KEY=VALUE ...]")
     else:
       meta = read_run_record(args.run_dir)
-    cfg = from_dict(meta["config"])
+    cfg = recorded_config(meta["config"], () if args.baseline else args.set)
     scenes, bases, budgets = _jobs(args, cfg)
     for line in _evaluate(args, meta, scenes, budgets, cfg) if scenes else ():
       print(line, flush=True)

@@ -25,7 +25,8 @@ from mjx_tracks.bounds import bound, violation
 from mjx_tracks.envs.randomization import RandomizationConfig
 from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
-from scenes.navigation import MAX_FLOOR_OBSTACLES, NAV_CLEARANCE_LIMITS, NAV_FLOOR_PASSAGE_LIMITS, NAV_GAP_LIMITS
+from scenes.navigation import (MAX_FLOOR_OBSTACLES, NAV_CLEARANCE_LIMITS, NAV_FLOOR_PASSAGE_LIMITS, NAV_GAP_LIMITS,
+                               NAV_LENGTH_LIMITS)
 from scenes.terrain_kinds import TERRAIN_PARAMS
 
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
@@ -223,6 +224,7 @@ class SceneConfig:
   nav_gap: tuple[float, float]  # m, nav: the gap C between the wall obstacles ~ U(min, max) (hard: narrow)
   nav_clearance: float = dataclasses.field(metadata=bound(*NAV_CLEARANCE_LIMITS))  # m, nav: the free-space path's distance from walls
   nav_floor_passage: float = dataclasses.field(metadata=bound(*NAV_FLOOR_PASSAGE_LIMITS))  # m, nav: disc radius with a way round the floor obstacles (0: none asked)
+  nav_length: float = dataclasses.field(metadata=bound(*NAV_LENGTH_LIMITS))  # m, nav: the area's length along x
   terrains: tuple[str, ...]  # terrain: the kinds drawn per episode (scenes.terrain)
   terrain: TerrainRanges  # every terrain kind's parameter ranges
   random_spawn: bool
@@ -366,6 +368,7 @@ class HeldOutNav:
   name: str
   gap: tuple[float, float]  # m, C ~ U(min, max) (SceneConfig.nav_gap)
   floor_obstacles: int = dataclasses.field(metadata=bound(0, MAX_FLOOR_OBSTACLES))
+  length: float = dataclasses.field(metadata=bound(*NAV_LENGTH_LIMITS))  # m, the area's length (SceneConfig.nav_length)
 
   def validate(self, key: str) -> None:
     require_plain_name(self.name, f"{key}.name")
@@ -622,6 +625,7 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("scene", "nav_gap"): [1.0, 2.0],  # before the gap setting: the original's U(1, 2) m
               ("scene", "nav_clearance"): 0.4,  # before the setting: robot 1's half-width
               ("scene", "nav_floor_passage"): 0.0,  # before the setting: floor obstacles drawn regardless
+              ("scene", "nav_length"): 12.0,  # before the setting: every area 12 m long
               ("reward", "progress_form"): "closest",  # before potential shaping: the paper's closest distance
               ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines
@@ -631,6 +635,10 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("observation", "scan_rays"): FROM_DEFAULTS,  # before the laser scan: read only by its part,
               ("observation", "scan_range"): FROM_DEFAULTS,  #   which no older run observes
               ("observation", "scan_pitches"): [0.0]}  # before scan rings: the horizontal scan alone
+
+
+# keys added to the entries of a list -> the value each older entry had
+ADDED_ENTRY_KEYS = {("evaluation", "held_out_nav", "length"): 12.0}  # before longer areas: 12 m, as trained
 
 
 def _with_added_keys(raw: dict) -> dict:
@@ -643,6 +651,11 @@ def _with_added_keys(raw: dict) -> dict:
       node = node.setdefault(part, {}) if isinstance(node, dict) else None
     if isinstance(node, dict) and path[-1] not in node:
       node[path[-1]] = functools.reduce(dict.get, path, defaults()) if value == FROM_DEFAULTS else value
+  for (*path, key), value in ADDED_ENTRY_KEYS.items():
+    entries = functools.reduce(lambda n, part: n.get(part) if isinstance(n, dict) else None, path, raw)
+    for entry in entries if isinstance(entries, list) else ():
+      if isinstance(entry, dict):
+        entry.setdefault(key, value)
   return raw
 
 

@@ -3,8 +3,19 @@ floor obstacles; xi = the two wall obstacles' extents and the gap."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 from scenes.kinds.base import HARDEST, HELD_OUT, NAV, SceneKind, no_held_out_staircases, replace_scene
 from scenes.navigation import NAV_AREAS
+
+
+def longer_episode(cfg, factor: float):
+  """cfg with its episodes `factor` times as long (rounded up to whole control steps): a held-out area
+  that much longer than the task's own gets the time to cross it."""
+  if factor == 1:
+    return cfg
+  return dataclasses.replace(cfg, episode=dataclasses.replace(cfg.episode, max_steps=math.ceil(cfg.episode.max_steps * factor)))
 
 
 class Nav(SceneKind):
@@ -12,7 +23,7 @@ class Nav(SceneKind):
   camera = "overhead"
   signals = ("pitch_rate", "collision")
   distances = ("euclidean", "geodesic")
-  parameters = "scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height, scene.nav_floor_passage"
+  parameters = "scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height, scene.nav_floor_passage, scene.nav_length"
 
   def validate(self, cfg) -> None:
     from mjx_tracks.envs.config import require  # noqa: PLC0415
@@ -33,7 +44,7 @@ class Nav(SceneKind):
   def make(self, s):
     from scenes.navigation import NavScene  # noqa: PLC0415
     return NavScene(s.sampler, s.variant, s.nav_kinds, s.random_spawn, s.random_goal, s.nav_floor_obstacles,
-                    s.nav_floor_height, s.nav_gap, s.nav_clearance, s.nav_floor_passage)
+                    s.nav_floor_height, s.nav_gap, s.nav_clearance, s.nav_floor_passage, s.nav_length)
 
   def suite(self, cfg) -> list[str]:
     areas = cfg.scene.nav_kinds
@@ -52,7 +63,8 @@ class Nav(SceneKind):
       h = held.get(scene[len(HELD_OUT):])
       if h is None:
         raise ConfigError(f"scene {scene!r}: the task's held-out areas (evaluation.held_out_nav) are {list(held)}")
-      return replace_scene(cfg, nav_gap=tuple(h.gap), nav_floor_obstacles=h.floor_obstacles)
+      return longer_episode(replace_scene(cfg, nav_gap=tuple(h.gap), nav_floor_obstacles=h.floor_obstacles,
+                                          nav_length=h.length), h.length / cfg.scene.nav_length)
     if scene == "hardest" or scene.startswith(HARDEST):
       raise ConfigError(f"scene {scene!r}: navigation tasks have no hardest configuration; "
                         f"use uniform, {NAV}AREA or {HELD_OUT}NAME")
