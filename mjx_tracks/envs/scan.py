@@ -7,12 +7,13 @@ the floor about 0.8 m ahead. Indoor tracked robots commonly carry a 2D lidar; th
 N leaves the scanner (RobotSpec.lidar_pos, chassis frame) at yaw 2 pi k / N from the chassis' forward
 axis (counter-clockwise, seen from above), in the chassis' x-y plane, and reads the distance (m) to
 the first world surface (never the robot: beams.RAY_GROUPS), or `max_range` where nothing is hit
-within it. With several `pitches` (rad, downward from the chassis' x-y plane; observation.scan_pitches)
-the N rays are cast once per pitch, ring by ring (ray j N + k: ring j, yaw 2 pi k / N). A ring
-pitched down by p from a scanner h above flat floor meets it h / tan(p) away: the horizontal ring
-(p = 0) passes over anything lower than h (robot 1: 0.29 m, over nav-obstacles' 0.05-0.15 m floor
-boxes), a pitched ring reads a box as a shorter range. With the robustness suite's depth perturbations, a hit reads distance x (1 + N(0, r))
-and each ray is lost (reads max_range) with the hidden-ray probability.
+within it. With several `pitches` (rad, downward from the chassis' x-y plane;
+observation.scan_pitches) the N rays are cast once per pitch, ring by ring (ray j N + k: ring j,
+yaw 2 pi k / N). A ring pitched down by p from a scanner h above flat floor meets it h / tan(p)
+away: the horizontal ring (p = 0) passes over anything lower than h (robot 1: 0.29 m, over
+nav-obstacles' 0.05-0.15 m floor boxes), a pitched ring reads a box as a shorter range. With the
+robustness suite's depth perturbations, a hit reads distance x (1 + N(0, r)) and each ray is lost
+(reads max_range) with the hidden-ray probability.
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ class ScanLayout:
     return np.stack([np.cos(a) * np.cos(p), np.sin(a) * np.cos(p), -np.sin(p)], axis=-1).astype(np.float32)
 
   def world_rays(self, body_pos: jax.Array, body_mat: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Ray origin (3,) and unit world directions (N_s, 3) for the chassis pose."""
+    """Ray origin (3,) and unit world directions (rings x N_s, 3) for the chassis pose."""
     return body_pos + body_mat @ jnp.asarray(self.mount, jnp.float32), jnp.asarray(self.directions()) @ body_mat.T
 
 

@@ -100,7 +100,8 @@ def sites(run_dir: str, area: str, check_radius: float, discs: tuple[float, ...]
     raise SystemExit(f"error: {run_dir} {area}: a successful trial ends {miss.max():.2f} m from its scene's goal: "
                      "these are not the evaluation's scenes")
   box = footprint_distance(end, scene.box_pos[..., :2], scene.box_size[..., :2], scene.box_yaw)
-  outer = np.minimum(end - np.array(AREA_LO), np.array(AREA_HI) - end).min(axis=1)  # to the nearest wall plane
+  hi = np.array([core.scene.length, AREA_HI[1]])  # the area's far corner (x, y), m
+  outer = np.minimum(end - np.array(AREA_LO), hi - end).min(axis=1)  # to the nearest wall plane
   floor = box[:, WALL_OBSTACLES:].min(axis=1) if box.shape[1] > WALL_OBSTACLES else np.full(len(end), np.inf)
   near = np.stack([floor, box[:, :WALL_OBSTACLES].min(axis=1), outer], axis=-1)  # (trials, 3)
   hit = per["collided"] > 0
