@@ -1,8 +1,9 @@
 """2D navigation: hallway or zigzag (each with probability 1/2) with two wall obstacles.
 
 Area: x in [0, A] m with A = 12 (scene.nav_length; start area [0, 2], obstacle area [2, A - 2],
-goal area [A - 2, A]), y in [-W/2, W/2] with W = 10 m, closed by four wall planes. xi = (W1, L1, W2, L2, C), with the
-gap C ~ U(C_min, C_max) (scene.nav_gap; the original's U(1, 2) m, 1 + U(0, 1)):
+goal area [A - 2, A]), y in [-W/2, W/2] with W = 10 m, closed by four wall planes.
+xi = (W1, L1, W2, L2, C), with the gap C ~ U(C_min, C_max) (scene.nav_gap; the original's
+U(1, 2) m, 1 + U(0, 1)):
   hallway: obstacle 1 juts W1 ~ U(W/2 - C/2, W - C) from the left wall, obstacle 2 juts
            W2 ~ U(0, W - C - W1) from the right wall, so the hallway between them is >= C wide;
            both run L_i ~ U(L/2, L) along x (L = A - 4 m) from random points of the obstacle area.
@@ -14,7 +15,7 @@ ranges) and mapped onto those intervals. Spawn: fixed (1, 0) facing +x, or rando
 y ~ U(-4, 4), yaw ~ U(-pi/2, pi/2): every spawn is >= 0.8 m from the walls and the obstacle area
 (x >= 2 m), so a robot that cannot reverse can always turn in place (the circle robot 1 sweeps:
 0.62 m at rest, 0.75 m with its arm stretched flat ahead; x ~ U(0.75, 1.5) until 2026-11-25 put
-3 % of the hallway spawns within 0.75 m of an obstacle, some facing into it). Goal: fixed (11, 0),
+3 % of the hallway spawns within 0.75 m of an obstacle, some facing into it). Goal: fixed (A - 1, 0),
 or random x ~ U(A - 1.5, A - 0.5), y ~ U(-4, 4) (with A = 12: (11, 0), U(10.5, 11.5)).
 Floor obstacles (`floor_obstacles` of them): low boxes to drive over or around, each
 centred at x ~ U(2.5, A - 2.5), y ~ U(-4.5, 4.5) m, FLOOR_SIDE ~ U(0.3, 0.8) m along and across, and

@@ -15,7 +15,8 @@ def longer_episode(cfg, factor: float):
   that much longer than the task's own gets the time to cross it."""
   if factor == 1:
     return cfg
-  return dataclasses.replace(cfg, episode=dataclasses.replace(cfg.episode, max_steps=math.ceil(cfg.episode.max_steps * factor)))
+  steps = math.ceil(cfg.episode.max_steps * factor)
+  return dataclasses.replace(cfg, episode=dataclasses.replace(cfg.episode, max_steps=steps))
 
 
 class Nav(SceneKind):
@@ -23,7 +24,8 @@ class Nav(SceneKind):
   camera = "overhead"
   signals = ("pitch_rate", "collision")
   distances = ("euclidean", "geodesic")
-  parameters = "scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height, scene.nav_floor_passage, scene.nav_length"
+  parameters = ("scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height, "
+                "scene.nav_floor_passage, scene.nav_length")
 
   def validate(self, cfg) -> None:
     from mjx_tracks.envs.config import require  # noqa: PLC0415

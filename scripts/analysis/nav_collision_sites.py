@@ -124,7 +124,8 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("runs", nargs="+", help="run folders with eval-nav-AREA.json reports")
   p.add_argument("--check-radius", type=float, default=0.8, help="m: a successful trial ends this near its goal")
   p.add_argument("--discs", default="0.5,0.62,0.75",
-                 help="m, disc radii whose way round each layout is checked (robot 1: 0.62 turning at rest, 0.75 its arm out)")
+                 help="m, disc radii whose way round each layout is checked "
+                 "(robot 1: 0.62 turning at rest, 0.75 its arm out)")
   p.add_argument("--out", help="JSON path")
   args = p.parse_args(argv)
   discs = tuple(float(x) for x in args.discs.split(","))
@@ -137,14 +138,16 @@ def main(argv: list[str] | None = None) -> int:
   print(f"all: {sum(r['collided'] for r in rows)} collisions; nearest: {total}")
   print(f"within reach of the collided robot (reach {rows[0]['reach_m'] if rows else '-'} m): {reach_all}")
   outcomes = {k: sum(r["outcomes"][k] for r in rows) for k in rows[0]["outcomes"]} if rows else {}
-  tight = {d: {k: sum(r["no_way_round_for_disc_m"][d][k] for r in rows) for k in outcomes} for d in map("{:g}".format, discs)}
+  tight = {d: {k: sum(r["no_way_round_for_disc_m"][d][k] for r in rows) for k in outcomes}
+           for d in map("{:g}".format, discs)}
   for d, n in tight.items():
     print(f"no way round for a {d} m disc: " + ", ".join(f"{n[k]} of {outcomes[k]} {k}" for k in outcomes))
   if args.out:
     atomic.write_json(args.out, {"device": f"CPU ({platform.processor() or platform.machine()})",
                                  "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                                  "command": "python " + " ".join(sys.argv), "jax": jax.__version__,
-                                 "nearest_all": total, "in_reach_all": reach_all, "outcomes_all": outcomes, "no_way_round_all": tight,
+                                 "nearest_all": total, "in_reach_all": reach_all, "outcomes_all": outcomes,
+                                 "no_way_round_all": tight,
                                  "rows": rows})
   return 0
 
