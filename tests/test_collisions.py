@@ -11,22 +11,25 @@ import numpy as np
 from mujoco import mjx
 
 import mjx_tracks
+from mjx_tracks.sim import mjx_private
 from scenes.navigation import AREA_W
 
 ROBOT_Y = 0.0  # m; the robot stands at x = 6 m, heading +x (unless a case moves it along y)
 HIDDEN = ([-20.0, 0.0, -5.0], [0.1, 0.1, 0.1])  # a box out of the way (m)
 
 
-def _c_collision(watch, m: mujoco.MjModel, d: mujoco.MjData) -> bool:
-  """The rule of the module docstring, read off the C engine's contact list in plain Python."""
+def _c_collisions(watch, m: mujoco.MjModel, d: mujoco.MjData) -> set:
+  """The geom pairs (sorted) of the C engine's contacts that the module docstring's rule counts,
+  read off its contact list in plain Python."""
+  pairs = set()
   for k in range(d.ncon):
     c = d.contact[k]
     if c.dist - c.includemargin >= 0:
       continue
     for world, part in ((c.geom1, c.geom2), (c.geom2, c.geom1)):
       if m.geom_bodyid[part] > 0 and (watch.forbidden[world] or (watch.belts_only[world] and not watch.belt[part])):
-        return True
-  return False
+        pairs.add(tuple(sorted((int(c.geom1), int(c.geom2)))))
+  return pairs
 
 
 def _poses():
@@ -45,13 +48,14 @@ def _poses():
 
 @functools.lru_cache(maxsize=None)
 def _watched():
-  """(env, jitted flag(qpos, box centres, box half-sizes) per robot): one program for every test."""
+  """(env, jitted flag(qpos, box centres, box half-sizes) per robot: whether it collides, which
+  contacts are collisions, every contact's geom pair): one program for every test."""
   env = mjx_tracks.load("nav-obstacles", ["scene.nav_floor_obstacles=1"])
 
   def flag(q, p, s):
     m = env.sim.with_boxes(p, s)
-    d = mjx.make_data(m, impl="jax").replace(qpos=q)
-    return env.watch.touching(mjx.forward(m, d))
+    d = mjx.forward(m, mjx.make_data(m, impl="jax").replace(qpos=q))
+    return env.watch.touching(d), env.watch.colliding(d), mjx_private.contacts(d).geom
 
   return env, jax.jit(jax.vmap(flag))
 
@@ -66,13 +70,15 @@ def test_collision_flag_matches_the_c_engine_contacts_and_the_rule():
     qpos.append(np.asarray(sim.init_data(jnp.array([6.0, y, 0.0]), jnp.float32(0.0)).qpos))
   pos = jnp.array([[b[0] for b in boxes] for _, _, boxes, _ in cases])
   size = jnp.array([[b[1] for b in boxes] for _, _, boxes, _ in cases])
-  got = np.asarray(flags(jnp.asarray(np.stack(qpos)), pos, size))
-  for (name, expected, boxes, _), q, g in zip(cases, qpos, got):
+  got, which, geoms = map(np.asarray, flags(jnp.asarray(np.stack(qpos)), pos, size))
+  for (name, expected, boxes, _), q, g, w, pairs in zip(cases, qpos, got, which, geoms):
     m = sim.c_model_with_boxes(np.array([b[0] for b in boxes]), np.array([b[1] for b in boxes]))
     d = mujoco.MjData(m)
     d.qpos[:] = q
     mujoco.mj_forward(m, d)
-    assert bool(g) == _c_collision(watch, m, d) == expected, name
+    oracle = _c_collisions(watch, m, d)
+    assert bool(g) == bool(oracle) == expected, name
+    assert {tuple(sorted(map(int, p))) for p in pairs[w]} == oracle, name  # the same geom pairs
 
 
 def test_stair_and_terrain_worlds_watch_nothing():
@@ -86,5 +92,5 @@ def test_no_random_spawn_starts_touching_a_wall_or_obstacle():
   n = len(_poses())  # the other test's batch: the same program
   scenes = jax.vmap(env.scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(3), 64 * n), 1.0)
   qpos = jax.vmap(lambda p, y: env.sim.init_data(p, y).qpos)(scenes.spawn_pos, scenes.spawn_yaw)
-  hits = [np.asarray(flags(qpos[k:k + n], scenes.box_pos[k:k + n], scenes.box_size[k:k + n])) for k in range(0, 64 * n, n)]
+  hits = [np.asarray(flags(qpos[k:k + n], scenes.box_pos[k:k + n], scenes.box_size[k:k + n])[0]) for k in range(0, 64 * n, n)]
   assert not np.concatenate(hits).any()

@@ -49,6 +49,11 @@ class CollisionWatch:
 
   def touching(self, d) -> jax.Array:
     """() bool: whether a contact of the step just taken is a collision (module docstring)."""
+    return jnp.any(self.colliding(d))
+
+  def colliding(self, d) -> jax.Array:
+    """(contacts,) bool: which contacts of the step just taken are collisions (their geom pairs:
+    mjx_private.contacts(d).geom)."""
     c = mjx_private.contacts(d)
     g1, g2 = c.geom[:, 0], c.geom[:, 1]
     robot, belt = jnp.asarray(self.robot), jnp.asarray(self.belt)
@@ -58,4 +63,4 @@ class CollisionWatch:
       return robot[part] & (forbidden[world] | (belts_only[world] & ~belt[part]))
 
     penetrating = c.dist - c.includemargin < 0
-    return jnp.any(penetrating & (hits(g1, g2) | hits(g2, g1)))
+    return penetrating & (hits(g1, g2) | hits(g2, g1))
