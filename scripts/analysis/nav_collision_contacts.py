@@ -1,13 +1,15 @@
 """What touched what? Each run's policy drives the evaluation's trials of a navigation area again
 (the run's config, the area's draw, reset keys split from EVAL_SEED, eps EVAL_EPS, the exported
-policy, deterministic: train.evaluate's trials), and at the control step where a trial's first
-collision is flagged the collision contacts left in the data (the step's last physics substep:
-mjx_tracks.sim.collisions) name the robot geom and the world geom. A collision whose contact ended
-before the step's last substep is counted as "gone by the step's end". The reports were written
+policy, deterministic: train.evaluate's trials). Beside each control step its physics substeps are
+run again one by one from the same state and command (the env's _advance without randomization:
+tasks with randomization are refused), and the first collision contact of the substep where a
+trial's first collision happens names the robot geom and the world geom
+(mjx_tracks.sim.collisions). A step the env flags that the replayed substeps do not is counted
+as "not found in the substeps" (none is expected). The reports were written
 on a GPU and the replay runs here: the same trials, rounded differently, so a trial's course may
 part from its report's; each row says how many of the replay's collided trials collided in the
 report too (eval-nav-AREA.json).
-Prints a line per run and area and writes JSON with the device, command and date. CPU: about 2
+Prints a line per run and area and writes JSON with the device, command and date. CPU: about 4
 minutes per run and area.
 
 python scripts/analysis/nav_collision_contacts.py \
@@ -38,7 +40,7 @@ from train.core.policy import act_from_params, load_policy_params
 from train.core.run_record import read_run_record
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_programs, trial_keys, trial_starts
 
-GONE = "gone by the step's end"
+GONE = "not found in the substeps"
 
 
 def first_collision_pairs(core, make_act, params, keys, draw) -> jax.Array:
@@ -46,12 +48,10 @@ def first_collision_pairs(core, make_act, params, keys, draw) -> jax.Array:
   collision (-1, -1 where none was left in the data; -2, -2: no collision)."""
   def body(carry, _):
     s, active, pair = carry
-    nxt = jax.vmap(core.step)(s, make_act(params)(s.obs))
+    action = make_act(params)(s.obs)
+    nxt = jax.vmap(core.step)(s, action)
     newly = active & nxt.pipeline_state.collided & ~s.pipeline_state.collided
-    mask = jax.vmap(core.watch.colliding)(nxt.pipeline_state.data)  # (trials, contacts)
-    geoms = mjx_private.contacts(nxt.pipeline_state.data).geom  # (trials, contacts, 2)
-    found = jnp.take_along_axis(geoms, jnp.argmax(mask, axis=1)[:, None, None], axis=1)[:, 0]
-    found = jnp.where(mask.any(axis=1)[:, None], found, -1)
+    found = jax.vmap(lambda s1, a: substep_pair(core, s1, a))(s, action)
     return (nxt, active & (nxt.done == 0), jnp.where(newly[:, None], found, pair)), None
 
   s = trial_starts(core, keys, EVAL_EPS, None, draw)
@@ -59,6 +59,23 @@ def first_collision_pairs(core, make_act, params, keys, draw) -> jax.Array:
   start = (s, jnp.ones(trials, bool), jnp.full((trials, 2), -2, jnp.int32))
   (_, _, pair), _ = jax.lax.scan(body, start, None, length=core.cfg.episode.max_steps)
   return pair
+
+
+def substep_pair(core, s, action) -> jax.Array:
+  """(2,) int: the geom pair of the first collision contact among one control step's substeps, run
+  again from state s with the action's command (-1, -1: none)."""
+  es = s.pipeline_state
+  m = core._model(es.scene, es.robust)
+  v, w, targets = core.controller.decode(action, es.targets, s.info["eps"])
+  belts = core.controller.belt_speeds(v, w)
+
+  def sub(_, carry):
+    x, pair = carry
+    x = core.sim.substep(m, x, belts)
+    mask = core.watch.colliding(x)
+    first = mjx_private.contacts(x).geom[jnp.argmax(mask)]
+    return x, jnp.where((pair[0] < 0) & mask.any(), first, pair)
+  return jax.lax.fori_loop(0, core.substeps, sub, (es.data.replace(ctrl=targets), jnp.full(2, -1, jnp.int32)))[1]
 
 
 def pair_name(m: mujoco.MjModel, pair) -> str:
@@ -80,6 +97,8 @@ def contacts(run_dir: str, area: str) -> dict | None:
     return None
   reported = np.asarray(json.load(open(path))["per_trial"]["collided"]) > 0
   cfg = from_dict(read_run_record(run_dir)["config"])
+  if cfg.randomization.enabled:
+    raise SystemExit(f"error: {run_dir}: trained with randomization; the substeps are replayed without it")
   (program, draws), = scene_programs(cfg, [area])
   core = TrackedRobotEnv(program)
   spec, params = load_policy_params(os.path.join(run_dir, "policy"))
