@@ -21,11 +21,8 @@ from __future__ import annotations
 
 import argparse
 import collections
-import datetime
 import json
 import os
-import platform
-import sys
 
 import jax
 import jax.numpy as jnp
@@ -38,7 +35,8 @@ from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.sim import mjx_private
 from train.core.policy import act_from_params, load_policy_params
 from train.core.run_record import read_run_record
-from train.evaluation import EVAL_EPS, EVAL_SEED, scene_programs, trial_keys, trial_starts
+from train.evaluation import EVAL_EPS, EVAL_SEED, report_path, scene_programs, trial_keys, trial_starts
+from provenance import provenance  # scripts/analysis/provenance.py (this script's folder is on sys.path)
 
 GONE = "not found in the substeps"
 
@@ -92,7 +90,7 @@ def pair_name(m: mujoco.MjModel, pair) -> str:
 
 def contacts(run_dir: str, area: str) -> dict | None:
   """One run's first collision contacts on one area (None where the run has no such report)."""
-  path = os.path.join(run_dir, f"eval-{area.replace('/', '-')}.json")
+  path = report_path(run_dir, area, None)
   if not os.path.exists(path):
     return None
   reported = np.asarray(json.load(open(path))["per_trial"]["collided"]) > 0
@@ -127,10 +125,7 @@ def main(argv: list[str] | None = None) -> int:
   total = dict(sum((collections.Counter(r["first_contacts"]) for r in rows), collections.Counter()).most_common())
   print(f"all: {total}")
   if args.out:
-    atomic.write_json(args.out, {"device": f"CPU ({platform.processor() or platform.machine()})",
-                                 "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-                                 "command": "python " + " ".join(sys.argv), "jax": jax.__version__,
-                                 "first_contacts_all": total, "rows": rows})
+    atomic.write_json(args.out, {**provenance(), "first_contacts_all": total, "rows": rows})
   return 0
 
 

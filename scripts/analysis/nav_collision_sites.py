@@ -26,11 +26,8 @@ from __future__ import annotations
 
 import argparse
 import collections
-import datetime
 import json
 import os
-import platform
-import sys
 
 import jax
 import jax.numpy as jnp
@@ -42,7 +39,8 @@ from mjx_tracks.envs.config import from_dict
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from scenes.navigation import AREA_HI, AREA_LO, NAV_AREAS, WALL_OBSTACLES
 from train.core.run_record import read_run_record
-from train.evaluation import EVAL_EPS, EVAL_SEED, scene_programs, trial_keys, trial_starts
+from train.evaluation import EVAL_EPS, EVAL_SEED, report_path, scene_programs, trial_keys, trial_starts
+from provenance import provenance  # scripts/analysis/provenance.py (this script's folder is on sys.path)
 
 KINDS = ("floor obstacle", "wall obstacle", "outer wall")
 REACH_SLACK = 0.05  # m: tilt, and the chassis' travel within the control step that ended the episode
@@ -85,7 +83,7 @@ def trial_scenes(cfg, area: str, trials: int, discs: tuple[float, ...]):
 
 def sites(run_dir: str, area: str, check_radius: float, discs: tuple[float, ...]) -> dict | None:
   """Collision sites of one run on one area (None where the run has no such report)."""
-  path = os.path.join(run_dir, f"eval-{area.replace('/', '-')}.json")
+  path = report_path(run_dir, area, None)
   if not os.path.exists(path):
     return None
   report = json.load(open(path))
@@ -143,10 +141,7 @@ def main(argv: list[str] | None = None) -> int:
   for d, n in tight.items():
     print(f"no way round for a {d} m disc: " + ", ".join(f"{n[k]} of {outcomes[k]} {k}" for k in outcomes))
   if args.out:
-    atomic.write_json(args.out, {"device": f"CPU ({platform.processor() or platform.machine()})",
-                                 "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-                                 "command": "python " + " ".join(sys.argv), "jax": jax.__version__,
-                                 "nearest_all": total, "in_reach_all": reach_all, "outcomes_all": outcomes,
+    atomic.write_json(args.out, {**provenance(), "nearest_all": total, "in_reach_all": reach_all, "outcomes_all": outcomes,
                                  "no_way_round_all": tight,
                                  "rows": rows})
   return 0
