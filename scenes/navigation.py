@@ -42,6 +42,7 @@ import jax
 import jax.numpy as jnp
 
 from scenes import samplers
+from scenes.clearance import footprint_clearance
 from scenes.geodesic import geodesic_distance
 from scenes.samplers import Ranges
 from scenes.scene import SceneState
@@ -206,6 +207,13 @@ class NavScene:
     wanted = self.clearance if clearance is None else clearance
     return path_around(pos[:2], scene.goal[:2], scene.box_pos[:boxes, :2], scene.box_size[:boxes, :2],
                        gap_capped(wanted, scene.xi[4]), self.length)  # xi[4]: this area's gap C
+
+  def wall_clearance(self, scene: SceneState, pos: jax.Array, yaw: jax.Array, half: jax.Array) -> jax.Array:
+    """() m: distance from the robot's footprint (centre pos (x, y, ...), yaw rad, half-sizes half
+    (2,) m) to the nearest wall or wall obstacle (scenes.clearance); floor obstacles are driven over."""
+    box = scene.box_pos[:WALL_OBSTACLES, :2], scene.box_size[:WALL_OBSTACLES, :2]
+    return footprint_clearance(pos[:2], yaw, half, box[0] - box[1], box[0] + box[1], jnp.array(AREA_LO),
+                               jnp.array((self.length, AREA_HI[1])))
 
   def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the

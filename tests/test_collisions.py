@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
+import pytest
 from mujoco import mjx
 
 import mjx_tracks
@@ -94,3 +95,25 @@ def test_no_random_spawn_starts_touching_a_wall_or_obstacle():
   qpos = jax.vmap(lambda p, y: env.sim.init_data(p, y).qpos)(scenes.spawn_pos, scenes.spawn_yaw)
   hits = [np.asarray(flags(qpos[k:k + n], scenes.box_pos[k:k + n], scenes.box_size[k:k + n])[0]) for k in range(0, 64 * n, n)]
   assert not np.concatenate(hits).any()
+
+
+def test_footprint_clearance_reads_the_hand_derived_gap_and_zero_where_the_c_engine_sees_a_collision():
+  """The footprint (robot 1: flipper capsules of radius 0.075 m at y = +-0.315 m, their tips at
+  x = +-(0.4 + 0.105) m) against the wall-obstacle and wall-plane cases of _poses(): its clearance
+  is the face's distance beyond y = 0.39 m (0 inside), and 0 in every case the C engine collides."""
+  env, _ = _watched()
+  assert env.footprint == pytest.approx((0.505, 0.39))
+  state = env.scene.sample(jax.random.PRNGKey(0), 1.0)
+  for name, collides, boxes, y in _poses():
+    if "floor" in name:
+      continue
+    face = boxes[0][0][1] - boxes[0][1][1] if boxes[0] is not HIDDEN else AREA_W / 2  # m, the near face's y
+    scene = state.replace(box_pos=jnp.array([b[0] for b in boxes]), box_size=jnp.array([b[1] for b in boxes]))
+    got = float(env.kind.clearance(env.scene, scene, jnp.array([6.0, y, 0.2]), jnp.float32(0.0),
+                                   jnp.array(env.footprint)))
+    assert got == pytest.approx(max(face - y - 0.39, 0.0), abs=1e-5), name
+    assert (got == 0.0) == collides, name
+  # turned by 90 degrees at the area's back wall (x = 0): the flipper tips face the side walls, the side the back wall
+  scene = state.replace(box_pos=jnp.array([HIDDEN[0]] * 2), box_size=jnp.array([HIDDEN[1]] * 2))
+  got = env.kind.clearance(env.scene, scene, jnp.array([0.5, 0.0, 0.2]), jnp.float32(np.pi / 2), jnp.array(env.footprint))
+  assert float(got) == pytest.approx(0.5 - 0.39, abs=1e-5)

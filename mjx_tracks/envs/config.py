@@ -305,6 +305,8 @@ class RewardConfig:
   safety_form: str  # SAFETY_FORMS
   progress_form: str  # PROGRESS_FORMS
   collision_penalty: float = dataclasses.field(metadata=bound(0.0))  # per control step with a collision
+  clearance_penalty: float = dataclasses.field(metadata=bound(0.0))  # per control step at clearance 0 (nav)
+  clearance_margin: float = dataclasses.field(metadata=bound(0.01, 2.0))  # m, the clearance below which it pays
 
   def validate(self, key: str) -> None:
     require(self.kind in REWARD_SIGNALS, f"{key}.kind", lambda: f"must be one of {list(REWARD_SIGNALS)}, got {show(self.kind)}")
@@ -469,6 +471,8 @@ class TaskConfig:
     require("collision" in kind.signals or not (self.episode.end_on_collision or self.reward.collision_penalty),
             "episode.end_on_collision" if self.episode.end_on_collision else "reward.collision_penalty",
             lambda: f"{self.scene.kind} scenes have nothing to collide with (collisions: nav scenes)")
+    require("clearance" in kind.signals or not self.reward.clearance_penalty, "reward.clearance_penalty",
+            lambda: f"{self.scene.kind} scenes measure no clearance from walls (it is measured in nav scenes)")
     steps = self.control.period / self.physics.timestep
     require(abs(steps - round(steps)) < 1e-6, "control.period", "must be a multiple of physics.timestep")
     for i, case in enumerate(self.evaluation.robustness):
@@ -628,6 +632,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("scene", "nav_length"): 12.0,  # before the setting: every area 12 m long
               ("reward", "progress_form"): "closest",  # before potential shaping: the paper's closest distance
               ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
+              ("reward", "clearance_penalty"): 0.0,  # before the clearance term: none
+              ("reward", "clearance_margin"): FROM_DEFAULTS,  # read only by that term
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines
               ("episode", "end_on_collision"): False,  # before collision safety: collisions go on
               ("randomization",): FROM_DEFAULTS,  # before sim-to-real randomization: off (enabled: false)

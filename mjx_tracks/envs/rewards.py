@@ -21,6 +21,9 @@ for every path, so a detour costs nothing once undone. With episode.distance geo
 free-space path length around obstacles (scenes.geodesic) instead of the straight line.
 Collision: a step whose physics touched a wall or obstacle costs collision_penalty and, with
 episode.end_on_collision, ends the episode.
+Clearance: with the robot's footprint c m from the nearest wall or wall obstacle (scenes.clearance),
+a step costs clearance_penalty * max(clearance_margin - c, 0) / clearance_margin (at most
+clearance_penalty, touching): room to turn before a collision, not only the collision.
 Goal: reaching the goal earns goal_bonus once (it ends the episode): with a length-neutral safety
 penalty, the only thing that makes running out of time cost more than the last metres of progress.
 Tip-over: |roll| or |pitch| > pi/2 costs tipover_penalty and ends the episode. The episode also
@@ -133,9 +136,16 @@ class Monitor:
     before = (signal_sum - window[0]) / jnp.maximum(steps - 1, 1)  # window[0]: this step's sample
     return signal_sum / steps - jnp.where(steps > 1, before, 0.0)
 
-  def evaluate(self, dist, closest, d0, rpy, rate: jax.Array, k: jax.Array, collided: jax.Array):
+  def closeness(self, clearance: jax.Array) -> jax.Array:
+    """(margin - clearance) / margin (m / m) where the clearance is below reward.clearance_margin, else 0."""
+    margin = self.reward.clearance_margin
+    return jnp.maximum(margin - clearance, 0.0) / margin
+
+  def evaluate(self, dist, closest, d0, rpy, rate: jax.Array, k: jax.Array, collided: jax.Array,
+               clearance: jax.Array | float = float("inf")):
     """Reward terms, new closest, terminated flag, flags dict for one step; rate: safety_rate(...);
-    collided: whether the step's physics touched a wall or obstacle (mjx_tracks.sim.collisions)."""
+    collided: whether the step's physics touched a wall or obstacle (mjx_tracks.sim.collisions);
+    clearance: the footprint's distance (m) from the nearest wall (inf: not measured)."""
     progress, closest = progress_step(dist, closest, d0, self.reward.progress_form)
     tipped = tipped_over(rpy)
     reached = goal_reached(dist)
@@ -146,6 +156,7 @@ class Monitor:
         "tipover": -self.reward.tipover_penalty * tipped.astype(jnp.float32),
         "goal": self.reward.goal_bonus * reached.astype(jnp.float32),
         "collision": -self.reward.collision_penalty * collided.astype(jnp.float32),
+        "clearance": -self.reward.clearance_penalty * self.closeness(clearance),
     }
     ends = tipped | reached | away | (collided & self.episode.end_on_collision)
     return terms, progress, closest, ends, {"tipped": tipped, "reached": reached, "away": away, "collided": collided}

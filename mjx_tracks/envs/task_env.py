@@ -28,6 +28,7 @@ from mjx_tracks.sim.control import Controller
 from mjx_tracks.sim.layout import BELT_SIDE
 from mjx_tracks.sim.pose import chassis_rpy
 from mjx_tracks.sim.simulator import Simulator
+from scenes.clearance import footprint_half
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
 from scenes.samplers import Draw
@@ -78,6 +79,7 @@ class TrackedRobotEnv(Env):
     self.scene = self.kind.make(cfg.scene)
     self.sim = Simulator.create(self.robot, self.scene.world_xml(), cfg.physics)
     self.watch = CollisionWatch.create(self.sim.mj_model, self.sim.layout, *self.kind.collision_geoms(self.scene))
+    self.footprint = footprint_half(self.sim.mj_model, self.sim.layout.chassis_body)  # (m, m) half-sizes
     self.substeps = int(round(cfg.control.period / cfg.physics.timestep))
     o = cfg.observation
     self.beams = BeamLayout.create(
@@ -133,7 +135,7 @@ class TrackedRobotEnv(Env):
     signal_sum, steps = es.signal_sum + sample, es.steps + 1
     rate = self.monitor.safety_rate(window, signal_sum, steps)
     terms, progress, closest, terminated, flags = self.monitor.evaluate(
-        dist, es.closest, es.d0, rpy, rate, es.penalty_k, collided)
+        dist, es.closest, es.d0, rpy, rate, es.penalty_k, collided, self._clearance(pos, rpy[2], es.scene))
     terms = {k: jnp.where(finite, t, 0.0) for k, t in terms.items()}
     terminated = terminated | ~finite
     key, k_obs = jax.random.split(es.key)
@@ -234,6 +236,12 @@ class TrackedRobotEnv(Env):
       return straight
     path = self.scene.free_space_distance(scene, pos) - self.cfg.episode.goal_tolerance
     return jnp.where(jnp.isfinite(path), path, straight)
+
+  def _clearance(self, pos: jax.Array, yaw: jax.Array, scene: SceneState) -> jax.Array:
+    """The footprint's distance (m) from the nearest wall where reward.clearance_penalty reads it, else inf."""
+    if not self.cfg.reward.clearance_penalty:
+      return jnp.float32(jnp.inf)
+    return self.kind.clearance(self.scene, scene, pos, yaw, jnp.array(self.footprint, jnp.float32))
 
   # --- sensors ------------------------------------------------------------------------------
   def _sense(self, m: mjx.Model, d: mjx.Data) -> mjx.Data:

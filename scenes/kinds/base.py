@@ -29,7 +29,8 @@ class SceneKind:
 
   name: str = ""
   camera: str = "follow"  # mjx_tracks.tools.render: "follow" (behind the robot) | "overhead"
-  signals: tuple[str, ...] = ("pitch_rate",)  # safety signals its scenes measure (metrics names)
+  signals: tuple[str, ...] = ("pitch_rate",)  # safety signals its scenes measure (metric names; `clearance`:
+  #                                             the footprint's distance from walls, clearance() below)
   distances: tuple[str, ...] = ("euclidean",)  # goal distances it measures (episode.distance; config.DISTANCES)
   parameters: str = ""  # one line for the README / dashboard: what its xi holds
   stair_script: bool = False  # whether the stair script (the `scripted` baseline, mjx_tracks.baselines) fits it
@@ -40,6 +41,11 @@ class SceneKind:
     """Geom names of its world that (any part of the robot, any part but a track belt) must not
     touch: a contact counts as a collision (the `collision` metric). scene: its generator (make())."""
     return (), ()
+
+  def clearance(self, scene, state, pos, yaw, half):
+    """() m: the robot's footprint (centre pos, yaw rad, half-sizes half m) from the nearest wall
+    (where "clearance" is among its signals). scene: its generator; state: the episode's SceneState."""
+    raise NotImplementedError(f"{self.name} scenes measure no clearance")
 
   def has_hardest(self, s: SceneConfig) -> bool:
     """Whether its scenes have a hardest configuration (every parameter at its hard end)."""

@@ -22,7 +22,7 @@ def longer_episode(cfg, factor: float):
 class Nav(SceneKind):
   name = "nav"
   camera = "overhead"
-  signals = ("pitch_rate", "collision")
+  signals = ("pitch_rate", "collision", "clearance")
   distances = ("euclidean", "geodesic")
   parameters = ("scene.nav_kinds (areas drawn), scene.nav_floor_obstacles, scene.nav_floor_height, "
                 "scene.nav_floor_passage, scene.nav_length")
@@ -78,6 +78,9 @@ class Nav(SceneKind):
 
   def collision_geoms(self, scene):
     return scene.collision_geoms()
+
+  def clearance(self, scene, state, pos, yaw, half):
+    return scene.wall_clearance(state, pos, yaw, half)
 
   def groups(self, s) -> tuple[str, ...]:
     return tuple(s.nav_kinds)
