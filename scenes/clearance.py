@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
-_SIGNS = jnp.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+_SIGNS = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])  # corner signs (numpy: nothing touches a device at import)
 
 
 def rectangle_corners(centre: jax.Array, yaw: jax.Array, half: jax.Array) -> jax.Array:
