@@ -16,6 +16,8 @@ import pytest
 
 from fastapi.testclient import TestClient
 
+from helpers import TINY
+
 import train.core.no_triton  # noqa: F401  (before any test imports PyTorch: train.core.no_triton says why)
 from train.core.policy import load_policy
 
@@ -45,8 +47,9 @@ class _StopAfter:
 
 
 def _args(out, db, *more):
+  """The training tests' tiny task (helpers.TINY: 5 physics steps per control step, no beams)."""
   return ["--library", "sb3", "--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", "--steps", "400",
-          "--hp", "training_metrics_steps=100", "--out", str(out), "--db", str(db), *more]
+          "--hp", "training_metrics_steps=100", *TINY, "--out", str(out), "--db", str(db), *more]
 
 
 def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, monkeypatch, capsys):
