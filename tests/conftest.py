@@ -8,12 +8,15 @@ import sys
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # The suite's time is mostly XLA compiling programs that then run a few steps. LLVM without its
-# optimization passes (-25 % compile time per program) and, where this jaxlib's XLA knows the flag
-# (an unknown flag aborts the process), the CPU's classic emitters instead of its fusion emitters
-# (a further -35 % for an env's step; tests/test_env.py's nav and des-hard steps, cold cache: 27 -> 17 s).
+# optimization passes (-25 % compile time per program) and, where this jaxlib's XLA takes the flags
+# (an unknown flag aborts the process, so a subprocess tries them first), the CPU's classic emitters
+# instead of its fusion emitters, with instructions up to AVX: no FMA, which the classic emitters
+# contract a*b+c into in some programs and not in others (1-ulp differences that fail the suite's
+# bit-for-bit comparisons of two programs). tests/test_env.py's nav and des-hard steps, cold cache:
+# 27 s with the first flag alone, 20 s with all three; the whole suite 12:09 -> 8:16 here (2 cores).
 # The persistent cache keys on XLA_FLAGS, so these programs never serve a run outside the tests.
 # Set once (the pytest process); its workers and the subprocesses the tests start inherit them.
-FAST_COMPILE = ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false")
+FAST_COMPILE = ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false", "--xla_cpu_max_isa=AVX")
 
 
 def _xla_accepts(flags: str) -> bool:
