@@ -13,7 +13,7 @@ os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # instead of its fusion emitters, with instructions up to AVX: no FMA, which the classic emitters
 # contract a*b+c into in some programs and not in others (1-ulp differences that fail the suite's
 # bit-for-bit comparisons of two programs). tests/test_env.py's nav and des-hard steps, cold cache:
-# 27 s with the first flag alone, 20 s with all three; the whole suite 12:09 -> 8:16 here (2 cores).
+# 27 s with the first flag alone, 20 s with all three; the whole suite, cold, 2 cores: 12:09 -> 8:24.
 # The persistent cache keys on XLA_FLAGS, so these programs never serve a run outside the tests.
 # Set once (the pytest process); its workers and the subprocesses the tests start inherit them.
 FAST_COMPILE = ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false", "--xla_cpu_max_isa=AVX")

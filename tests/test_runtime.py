@@ -144,9 +144,11 @@ def _runs_match(a: str, b: str, step: int, name: str) -> None:
 
 
 def _start_tiny_run(out: str, database: str, devices: int):
-  """The ppo_run fixture's training (its first update) on `devices` CPU devices."""
-  return start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database],
-                        out + ".log", {"XLA_FLAGS": f"--xla_force_host_platform_device_count={devices}"})
+  """The ppo_run fixture's training (its first update) on `devices` CPU devices (with the suite's
+  compile flags, tests/conftest.py)."""
+  flags = f"{os.environ.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count={devices}".strip()
+  return start_training([*TRAIN_TINY, "--steps", "512", "--out", out, "--db", database], out + ".log",
+                        {"XLA_FLAGS": flags})
 
 
 def test_two_cpu_devices_train_like_one(ppo_run, tmp_path):
