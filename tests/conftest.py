@@ -108,8 +108,7 @@ def ppo_run(tmp_path_factory):
 
 # Files that compile the most start first (pytest-xdist hands files out in collection order): the
 # shared PPO run is made early, and no long file starts last while the other worker idles.
-FIRST = ("test_training.py", "test_group.py", "test_env.py", "test_training_sac.py", "test_brax_reference.py",
-         "test_evaluator.py")
+FIRST = ("test_training.py", "test_env.py", "test_training_sac.py", "test_brax_reference.py", "test_evaluator.py")
 
 
 def pytest_collection_modifyitems(items):
