@@ -2,8 +2,8 @@
 area, pure JAX (the nav tasks' `reward.clearance_penalty` reads it).
 
 The footprint is a rectangle of half-sizes (hx, hy) centred on the chassis origin and turned by its
-yaw: every colliding robot geom, level at rest, lies inside it (footprint_half). Obstacles are
-axis-aligned boxes [lo, hi]; the area is the rectangle [area_lo, area_hi] inside its wall planes.
+yaw: every colliding robot geom, level at rest, lies inside it (mjx_tracks.sim.collisions.footprint_half).
+Obstacles are axis-aligned boxes [lo, hi]; the area is the rectangle [area_lo, area_hi] inside its wall planes.
 Two disjoint convex polygons are as far apart as the nearest pair of a vertex of one and the other
 polygon, so the distance to a box is the least of the footprint's corners to the box and the box's
 corners to the footprint; it is 0 where a corner of either lies inside the other. (Two rectangles
@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-import mujoco
 import numpy as np
 
 _SIGNS = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])  # corner signs (numpy: nothing touches a device at import)
@@ -55,17 +54,3 @@ def footprint_clearance(centre: jax.Array, yaw: jax.Array, half: jax.Array, box_
   from_boxes = jnp.min(point_rectangle_distance(box_corners.reshape(-1, 2), centre, yaw, half).reshape(-1, 4), axis=1)
   to_walls = jnp.maximum(jnp.min(jnp.concatenate([corners - area_lo, area_hi - corners])), 0.0)
   return jnp.minimum(jnp.min(jnp.minimum(to_boxes, from_boxes), initial=jnp.inf), to_walls)
-
-
-def footprint_half(m: mujoco.MjModel, chassis_body: int) -> tuple[float, float]:
-  """(hx, hy) m: half-sizes of the smallest rectangle centred on the chassis origin, level at rest
-  (qpos0), holding every colliding geom of the robot (each geom's own bounding box, in its frame)."""
-  d = mujoco.MjData(m)
-  mujoco.mj_forward(m, d)
-  g = np.flatnonzero((m.geom_bodyid > 0) & ((m.geom_contype | m.geom_conaffinity) > 0))
-  aabb = np.asarray(m.geom_aabb)[g]  # (n, 6): centre and half-size in the geom's frame
-  signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * 3)).reshape(3, -1).T  # (8, 3)
-  local = aabb[:, None, :3] + signs[None] * aabb[:, None, 3:]  # (n, 8, 3)
-  world = d.geom_xpos[g, None] + np.einsum("nij,nkj->nki", d.geom_xmat[g].reshape(-1, 3, 3), local)
-  rel = world[..., :2] - d.xpos[chassis_body, :2]
-  return float(np.abs(rel[..., 0]).max()), float(np.abs(rel[..., 1]).max())

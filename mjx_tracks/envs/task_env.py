@@ -23,12 +23,11 @@ from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, norma
 from mjx_tracks.metrics import STEP_NAMES as METRICS  # the per-step metrics (mjx_tracks.metrics.STEP)
 from mjx_tracks.robots import get_robot
 from mjx_tracks.sim import mjx_private
-from mjx_tracks.sim.collisions import CollisionWatch
+from mjx_tracks.sim.collisions import CollisionWatch, footprint_half
 from mjx_tracks.sim.control import Controller
 from mjx_tracks.sim.layout import BELT_SIDE
 from mjx_tracks.sim.pose import chassis_rpy
 from mjx_tracks.sim.simulator import Simulator
-from scenes.clearance import footprint_half
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
 from scenes.samplers import Draw

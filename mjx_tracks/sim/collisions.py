@@ -4,7 +4,8 @@ A contact counts when its geoms penetrate (dist - includemargin < 0, the contact
 on) and one of them is a robot geom (a body other than the world) while the other is
 - a `forbidden` world geom (walls, wall obstacles): any part of the robot, belts included, or
 - a `belts_only` world geom (floor obstacles, driven over on the belts): any robot geom but a belt.
-The scene kind names both sets (scenes.kinds: SceneKind.collision_geoms).
+The scene kind names both sets (scenes.kinds: SceneKind.collision_geoms). footprint_half: the box
+of the robot's colliding geoms at rest, whose distance from walls scenes.clearance measures.
 """
 
 from __future__ import annotations
@@ -64,3 +65,17 @@ class CollisionWatch:
 
     penetrating = c.dist - c.includemargin < 0
     return penetrating & (hits(g1, g2) | hits(g2, g1))
+
+
+def footprint_half(m: mujoco.MjModel, chassis_body: int) -> tuple[float, float]:
+  """(hx, hy) m: half-sizes of the smallest rectangle centred on the chassis origin, level at rest
+  (qpos0), holding every colliding geom of the robot (each geom's own bounding box, in its frame)."""
+  d = mujoco.MjData(m)
+  mujoco.mj_forward(m, d)
+  g = np.flatnonzero((m.geom_bodyid > 0) & ((m.geom_contype | m.geom_conaffinity) > 0))
+  aabb = np.asarray(m.geom_aabb)[g]  # (n, 6): centre and half-size in the geom's frame
+  signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * 3)).reshape(3, -1).T  # (8, 3)
+  local = aabb[:, None, :3] + signs[None] * aabb[:, None, 3:]  # (n, 8, 3)
+  world = d.geom_xpos[g, None] + np.einsum("nij,nkj->nki", d.geom_xmat[g].reshape(-1, 3, 3), local)
+  rel = world[..., :2] - d.xpos[chassis_body, :2]
+  return float(np.abs(rel[..., 0]).max()), float(np.abs(rel[..., 1]).max())
