@@ -76,12 +76,16 @@ def gap_capped(r, gap):
   return jnp.minimum(r, gap / 2 - GAP_MARGIN)
 
 
+def area_corners(length: float = AREA_LEN) -> tuple[jax.Array, jax.Array]:
+  """(lo, hi) m: the corners (x, y) of the area of this length (m), inside its wall planes."""
+  return jnp.array(AREA_LO), jnp.array((length, AREA_HI[1]))
+
+
 def path_around(start, goal, box_pos, box_size, r, length: float = AREA_LEN):
   """Length (m; inf: none) of the shortest path from start to goal (x, y) in the area of this length
   (m) around the boxes (centres and half-sizes, (k, 2) m), keeping r (m) from them and from the walls
   (scenes.geodesic)."""
-  return geodesic_distance(start, goal, box_pos - box_size, box_pos + box_size, jnp.array(AREA_LO),
-                           jnp.array((length, AREA_HI[1])), r)
+  return geodesic_distance(start, goal, box_pos - box_size, box_pos + box_size, *area_corners(length), r)
 
 
 def _lerp(a, b, u):
@@ -212,8 +216,7 @@ class NavScene:
     """() m: distance from the robot's footprint (centre pos (x, y, ...), yaw rad, half-sizes half
     (2,) m) to the nearest wall or wall obstacle (scenes.clearance); floor obstacles are driven over."""
     box = scene.box_pos[:WALL_OBSTACLES, :2], scene.box_size[:WALL_OBSTACLES, :2]
-    return footprint_clearance(pos[:2], yaw, half, box[0] - box[1], box[0] + box[1], jnp.array(AREA_LO),
-                               jnp.array((self.length, AREA_HI[1])))
+    return footprint_clearance(pos[:2], yaw, half, box[0] - box[1], box[0] + box[1], *area_corners(self.length))
 
   def floor_boxes(self, key: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Centres and half-sizes (floor_obstacles, 3) of the floor obstacles (m; distributions in the

@@ -67,12 +67,18 @@ class CollisionWatch:
     return penetrating & (hits(g1, g2) | hits(g2, g1))
 
 
+def robot_at_rest(m: mujoco.MjModel) -> tuple[mujoco.MjData, np.ndarray]:
+  """The model's data at qpos0 (mj_forward: level, at rest) and the ids of the robot's colliding
+  geoms (a body other than the world, a contype or conaffinity bit)."""
+  d = mujoco.MjData(m)
+  mujoco.mj_forward(m, d)
+  return d, np.flatnonzero((m.geom_bodyid > 0) & ((m.geom_contype | m.geom_conaffinity) > 0))
+
+
 def footprint_half(m: mujoco.MjModel, chassis_body: int) -> tuple[float, float]:
   """(hx, hy) m: half-sizes of the smallest rectangle centred on the chassis origin, level at rest
   (qpos0), holding every colliding geom of the robot (each geom's own bounding box, in its frame)."""
-  d = mujoco.MjData(m)
-  mujoco.mj_forward(m, d)
-  g = np.flatnonzero((m.geom_bodyid > 0) & ((m.geom_contype | m.geom_conaffinity) > 0))
+  d, g = robot_at_rest(m)
   aabb = np.asarray(m.geom_aabb)[g]  # (n, 6): centre and half-size in the geom's frame
   signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * 3)).reshape(3, -1).T  # (8, 3)
   local = aabb[:, None, :3] + signs[None] * aabb[:, None, 3:]  # (n, 8, 3)

@@ -31,13 +31,13 @@ import os
 
 import jax
 import jax.numpy as jnp
-import mujoco
 import numpy as np
 
 from mjx_tracks import atomic
 from mjx_tracks.envs.config import from_dict
 from mjx_tracks.envs.task_env import TrackedRobotEnv
-from scenes.navigation import AREA_HI, AREA_LO, NAV_AREAS, WALL_OBSTACLES
+from mjx_tracks.sim.collisions import robot_at_rest
+from scenes.navigation import NAV_AREAS, WALL_OBSTACLES, area_corners
 from train.core.run_record import read_run_record
 from train.evaluation import EVAL_EPS, EVAL_SEED, report_path, scene_programs, trial_keys, trial_starts
 from provenance import provenance  # scripts/analysis/provenance.py (this script's folder is on sys.path)
@@ -50,10 +50,8 @@ def reaches(core) -> tuple[float, float]:
   """(m, m): how far from the chassis origin the robot's colliding non-belt geoms and all its
   colliding geoms reach, level at rest (module docstring)."""
   m, layout = core.sim.mj_model, core.sim.layout
-  data = mujoco.MjData(m)
-  mujoco.mj_forward(m, data)
+  data, g = robot_at_rest(m)
   chassis = data.xpos[layout.chassis_body, :2]
-  g = np.flatnonzero((m.geom_bodyid > 0) & ((m.geom_contype | m.geom_conaffinity) > 0))
   far = np.linalg.norm(data.geom_xpos[g, :2] - chassis, axis=1) + m.geom_rbound[g] + REACH_SLACK
   return float(far[layout.geom_belt[g] < 0].max()), float(far.max())
 
@@ -98,8 +96,8 @@ def sites(run_dir: str, area: str, check_radius: float, discs: tuple[float, ...]
     raise SystemExit(f"error: {run_dir} {area}: a successful trial ends {miss.max():.2f} m from its scene's goal: "
                      "these are not the evaluation's scenes")
   box = footprint_distance(end, scene.box_pos[..., :2], scene.box_size[..., :2], scene.box_yaw)
-  hi = np.array([core.scene.length, AREA_HI[1]])  # the area's far corner (x, y), m
-  outer = np.minimum(end - np.array(AREA_LO), hi - end).min(axis=1)  # to the nearest wall plane
+  lo, hi = map(np.asarray, area_corners(core.scene.length))  # the area's corners (x, y), m
+  outer = np.minimum(end - lo, hi - end).min(axis=1)  # to the nearest wall plane
   floor = box[:, WALL_OBSTACLES:].min(axis=1) if box.shape[1] > WALL_OBSTACLES else np.full(len(end), np.inf)
   near = np.stack([floor, box[:, :WALL_OBSTACLES].min(axis=1), outer], axis=-1)  # (trials, 3)
   hit = per["collided"] > 0
