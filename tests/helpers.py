@@ -6,9 +6,10 @@ import os
 # a small task variant for training tests (compiles and runs quickly on a CPU): no beams, short
 # episodes of 0.05 s control steps (5 physics steps each, not 25), every contact kept: contact
 # culling picks the nearest contacts with top_k, a discontinuity that grows float summation-order
-# differences (2 devices vs 1) past a comparison's tolerance
+# differences (2 devices vs 1) past a comparison's tolerance; two steps observed, so that training,
+# export, ONNX and SB3 tests run a stacked observation (tests/test_observation_history.py)
 TINY_SETTINGS = ("observation.parts=[v, flippers_paired, arm, pitch]", "episode.max_steps=8", "control.period=0.05",
-                 "physics.contact_slots=-1", "physics.box_pairs=-1")
+                 "physics.contact_slots=-1", "physics.box_pairs=-1", "observation.history=2")
 TINY = [arg for setting in TINY_SETTINGS for arg in ("--set", setting)]
 
 

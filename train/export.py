@@ -49,8 +49,9 @@ def layout_metadata(cfg) -> dict[str, object]:
   from mjx_tracks.sim.control import INCREMENT  # noqa: PLC0415
   env = TrackedRobotEnv(cfg)
   names = observation_names(env)
-  parts = [p for p in cfg.observation.parts for _ in range(env.part_sizes[p])]
-  obs = [{"name": n, "meaning": PARTS[p].doc} for n, p in zip(names, parts)]
+  parts = [p for p in cfg.observation.parts for _ in range(env.part_sizes[p])] * cfg.observation.history
+  obs = [{"name": n, "meaning": PARTS[p].doc + (f", {n.rsplit('@t-', 1)[1]} control steps back" if "@t-" in n else "")}
+         for n, p in zip(names, parts)]
   c = env.controller
   lo, hi = c.v_range
   joint = (f"joint target change: -1..1 onto +-{INCREMENT:.4f} rad per control step" if c.increments

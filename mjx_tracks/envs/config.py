@@ -160,6 +160,7 @@ class ObservationConfig:
   scan_rays: int = dataclasses.field(metadata=bound(1, 360))  # N_s, the laser scan's rays (part "scan")
   scan_range: float = dataclasses.field(metadata=bound(0.5, 30.0))  # m, a scan ray's reading where it hits nothing
   scan_pitches: tuple[float, ...]  # rad, the scan's rings, each pitched down from the chassis plane (0: horizontal)
+  history: int = dataclasses.field(metadata=bound(1, 16))  # control steps stacked (mjx_tracks.envs.observations.stack)
 
   def validate(self, key: str) -> None:
     from mjx_tracks.envs.observations import PARTS  # noqa: PLC0415
@@ -640,7 +641,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("evaluation", "robustness"): FROM_DEFAULTS,  # evaluation only: old runs get today's
               ("observation", "scan_rays"): FROM_DEFAULTS,  # before the laser scan: read only by its part,
               ("observation", "scan_range"): FROM_DEFAULTS,  #   which no older run observes
-              ("observation", "scan_pitches"): [0.0]}  # before scan rings: the horizontal scan alone
+              ("observation", "scan_pitches"): [0.0],  # before scan rings: the horizontal scan alone
+              ("observation", "history"): 1}  # before observation history: the current step alone
 
 
 # keys added to the entries of a list -> the value each older entry had

@@ -1,8 +1,10 @@
 """Observation parts: a registry of named, documented extractors over one step's sensor readings.
 
-A task's YAML lists the parts it observes (`observation.parts`); the observation is their
+A task's YAML lists the parts it observes (`observation.parts`); one step's observation is their
 concatenation in that order. Each part's size comes from `jax.eval_shape` of its extractor, so a
-part is defined once, here.
+part is defined once, here. With `observation.history` k > 1 the policy sees the last k steps'
+observations, newest first (`stack`): a memoryless policy can then tell a robot stuck at a stair
+edge from one arriving there.
 """
 
 from __future__ import annotations
@@ -92,6 +94,16 @@ def observe(parts: tuple[str, ...], s: Sensors, robot: RobotSpec) -> jax.Array:
   return jnp.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
 
 
-def observation_names(parts: tuple[str, ...], sizes: dict[str, int]) -> list[str]:
-  """One name per observation entry, in order."""
-  return [p if sizes[p] == 1 else f"{p}[{i}]" for p in parts for i in range(sizes[p])]
+def stack(current: jax.Array, previous: jax.Array | None, history: int) -> jax.Array:
+  """The observation of k = history steps, newest first: the current step's parts (n,), then the
+  first (k - 1) n entries of the previous stacked observation ((k n,): its k - 1 newest steps);
+  previous None (an episode's first step): k copies of the current one."""
+  if previous is None:
+    return jnp.tile(current, history)
+  return jnp.concatenate([current, previous[: (history - 1) * current.shape[0]]])
+
+
+def observation_names(parts: tuple[str, ...], sizes: dict[str, int], history: int = 1) -> list[str]:
+  """One name per observation entry, in order; an older step's entries end in @t-j (j steps back)."""
+  one = [p if sizes[p] == 1 else f"{p}[{i}]" for p in parts for i in range(sizes[p])]
+  return one + [f"{n}@t-{j}" for j in range(1, history) for n in one]

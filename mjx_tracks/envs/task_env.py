@@ -16,7 +16,7 @@ from mujoco import mjx
 
 from mjx_tracks.envs.beams import BeamLayout, depth_beams
 from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig
-from mjx_tracks.envs.observations import Sensors, observe, part_sizes
+from mjx_tracks.envs.observations import Sensors, observe, part_sizes, stack
 from mjx_tracks.envs import randomization as rnd
 from mjx_tracks.envs.scan import ScanLayout, scan_ranges
 from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, normalizer_init, on_stairs
@@ -100,7 +100,7 @@ class TrackedRobotEnv(Env):
   # --- Brax Env interface -------------------------------------------------------------------
   @property
   def observation_size(self) -> int:
-    return sum(self.part_sizes.values())
+    return sum(self.part_sizes.values()) * self.cfg.observation.history
 
   @property
   def action_size(self) -> int:
@@ -146,7 +146,7 @@ class TrackedRobotEnv(Env):
     metrics = {**state.metrics,
                **self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)}
     reward = sum(terms.values())
-    return state.replace(pipeline_state=es, obs=self._obs(es, m, k_obs), reward=reward,
+    return state.replace(pipeline_state=es, obs=self._obs(es, m, k_obs, state.obs), reward=reward,
                          done=terminated.astype(jnp.float32), metrics=metrics)
 
   # --- the curriculum wrapper's reset -------------------------------------------------------
@@ -277,8 +277,12 @@ class TrackedRobotEnv(Env):
                    vertical_beams=beams[: self.beams.n_vertical], horizontal_beams=beams[self.beams.n_vertical:],
                    scan=ranges)
 
-  def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array) -> jax.Array:
-    return observe(self.cfg.observation.parts, self.sensors(es, m, key), self.robot)
+  def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array, previous: jax.Array | None = None) -> jax.Array:
+    """The policy's observation: this step's parts, after the previous observation's newer steps
+    (observation.history; previous None at reset)."""
+    o = self.cfg.observation
+    current = observe(o.parts, self.sensors(es, m, key), self.robot)
+    return current if o.history == 1 else stack(current, previous, o.history)
 
   def _metrics(self, terms, progress, cog, on_stairs, pitch_rate, flags, nan) -> dict[str, jax.Array]:
     f = lambda x: jnp.asarray(x, jnp.float32)
@@ -294,7 +298,7 @@ class TrackedRobotEnv(Env):
 def observation_names(env: TrackedRobotEnv) -> list[str]:
   """One name per observation entry, in order."""
   from mjx_tracks.envs.observations import observation_names as names  # noqa: PLC0415
-  return names(env.cfg.observation.parts, env.part_sizes)
+  return names(env.cfg.observation.parts, env.part_sizes, env.cfg.observation.history)
 
 
 __all__ = ["EnvState", "TrackedRobotEnv", "METRICS", "make_scene", "observation_names"]
