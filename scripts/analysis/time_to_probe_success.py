@@ -1,6 +1,7 @@
 """For each run of a study: an upper bound on the time from its attempt's start to its first probe
-with success >= a threshold, from the records that came back (STUDY/study.sqlite's attempts, each
-run's RUN/run.sqlite). The attempt's start is stamped when the study hands the run to a worker, so
+with success >= a threshold, from the study's database (STUDY/study.sqlite: the attempts, and each
+run's rows and events, imported from its run.sqlite when it came back; the run's id from its
+RUN/run.json). The attempt's start is stamped when the study hands the run to a worker, so
 the bound includes any wait for a slot and the process's start-up and compilation (for packed
 seeds: the program of all of them). A probe row's wall_s counts from the run's reporter start; that
 start is at most the run's latest 'finished' event time (stored rounded down to the second, hence
@@ -17,17 +18,18 @@ import datetime
 import os
 import sqlite3
 
+from train.core.run_record import run_id_in
 from train.study.executor import cell_folder_of
 
 
-def run_bound(run_db: str, attempt_start: float, threshold: float) -> tuple[int, float] | None:
-  """(step, seconds) of the run's first probe >= threshold, seconds bounded from above; None if it
-  has none or did not finish (no bound)."""
-  with sqlite3.connect(f"file:{run_db}?mode=ro", uri=True) as c:  # read only: never creates a file
-    probes = c.execute("SELECT step, wall_s FROM stats WHERE source = 'probe' AND success_rate >= ? "
-                       "ORDER BY step LIMIT 1", (threshold,)).fetchall()
-    last_wall = c.execute("SELECT max(wall_s) FROM stats").fetchone()[0]
-    finished = c.execute("SELECT time FROM events WHERE event = 'finished' ORDER BY time DESC LIMIT 1").fetchone()
+def run_bound(c: sqlite3.Connection, run_id: str, attempt_start: float, threshold: float) -> tuple[int, float] | None:
+  """(step, seconds) of run run_id's first probe >= threshold, seconds bounded from above; None if
+  it has none or did not finish (no bound)."""
+  probes = c.execute("SELECT step, wall_s FROM stats WHERE run_id = ? AND source = 'probe' AND success_rate >= ? "
+                     "ORDER BY step LIMIT 1", (run_id, threshold)).fetchall()
+  last_wall = c.execute("SELECT max(wall_s) FROM stats WHERE run_id = ?", (run_id,)).fetchone()[0]
+  finished = c.execute("SELECT time FROM events WHERE run_id = ? AND event = 'finished' ORDER BY time DESC LIMIT 1",
+                       (run_id,)).fetchone()
   if not probes or finished is None:
     return None
   finished_at_most = datetime.datetime.fromisoformat(finished[0]).timestamp() + 1.0  # s: stored rounded down
@@ -38,16 +40,17 @@ def run_bound(run_db: str, attempt_start: float, threshold: float) -> tuple[int,
 
 def main(argv=None) -> int:
   p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  p.add_argument("study", help="a study folder (study.sqlite, runs/*/run.sqlite)")
+  p.add_argument("study", help="a study folder (study.sqlite, runs/*/run.json)")
   p.add_argument("--threshold", type=float, default=0.9, help="probe success (default %(default)s)")
   args = p.parse_args(argv)
-  with sqlite3.connect(os.path.join(args.study, "study.sqlite")) as c:
-    starts = dict(c.execute("SELECT cell, min(started) FROM attempts GROUP BY cell"))
+  # read only, as a finished study's file: never creates one, nor -wal / -shm files beside it
+  c = sqlite3.connect(f"file:{os.path.join(args.study, 'study.sqlite')}?mode=ro&immutable=1", uri=True)
+  starts = dict(c.execute("SELECT cell, min(started) FROM attempts GROUP BY cell"))
   for cell, start in sorted(starts.items()):
-    run_db = os.path.join(cell_folder_of(args.study, cell), "run.sqlite")
-    if not os.path.exists(run_db):
-      continue
-    found = run_bound(run_db, start, args.threshold)
+    run_id = run_id_in(cell_folder_of(args.study, cell))
+    if run_id is None or c.execute("SELECT 1 FROM stats WHERE run_id = ? LIMIT 1", (run_id,)).fetchone() is None:
+      continue  # no run record, or a run that never trained (a baseline)
+    found = run_bound(c, run_id, start, args.threshold)
     print(f"{cell}: " + (f"probe success >= {args.threshold} at step {found[0]:,}, at most {found[1]:.0f} s "
                          "after the attempt's start" if found else f"no probe >= {args.threshold}, or not finished (no bound)"))
   return 0
