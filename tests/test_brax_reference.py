@@ -21,7 +21,7 @@ def test_brax_ppo_train_trains_the_env_and_is_recorded_like_any_run(tmp_path, ca
   with sqlite3.connect(db) as c:
     assert c.execute("SELECT status, run_id FROM experiments").fetchall() == [("done", meta["run_id"])]
   act = load_policy(os.path.join(out, "policy"))
-  a = np.asarray(act(np.zeros((3, 6), np.float32)))
+  a = np.asarray(act(np.zeros((3, 12), np.float32)))  # the tiny task: 6 entries x 2 steps
   assert a.shape == (3, 5) and np.all(np.abs(a) <= 1)
   said = capsys.readouterr().out
   assert "done: 512 steps in " in said and "last training episodes" not in said  # none to report

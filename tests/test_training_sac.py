@@ -18,7 +18,7 @@ def test_sac_trains_exports_and_resumes_bit_for_bit_with_its_replay_buffer(tmp_p
   database = str(tmp_path / "db.sqlite")
   assert run.main([*SAC_TINY, "--steps", "256", "--out", whole, "--db", database]) == 0
   act = load_policy(os.path.join(whole, "policy"))
-  assert np.asarray(act(np.zeros((2, 6), np.float32))).shape == (2, 5)
+  assert np.asarray(act(np.zeros((2, 12), np.float32))).shape == (2, 5)  # the tiny task: 6 entries x 2 steps
   assert dbmod.ExperimentDB(database).run(run_id(whole))["status"] == "done"
   # the same run in two sessions: 128 steps (the buffer is past min_replay_size), then resumed to 256
   assert run.main([*SAC_TINY, "--steps", "128", "--out", part, "--db", database]) == 0
