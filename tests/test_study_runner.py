@@ -294,6 +294,30 @@ def test_status_says_submitted_not_running_for_runs_handed_to_the_cluster(tmp_pa
   assert all(" submitted " in line and " running " not in line for line in lines[2:])
 
 
+def test_status_reads_a_runs_hardest_success_from_its_report_or_else_from_the_study_database(tmp_path):
+  """A committed study keeps no per-run reports: the success column then comes from the final
+  evaluation's trials in study.sqlite (a milestone's trials left out), and reading it leaves no
+  -wal / -shm files beside it."""
+  from train.core.run_record import write_run_record
+  folder = tmp_path / "s"
+  folder.mkdir()
+  state = {"cells": {"g/t/1/s0": {"status": "done", "attempts": [{"started": 1.0}]}}}
+  json.dump(state, open(folder / "state.json", "w"))
+  run = folder / "runs" / "g_t_1_s0"
+  write_run_record(str(run), {"run_id": "r0"})
+  db = ExperimentDB(str(folder / STUDY_DB))
+  db.log_evals("r0", [{"scene": "hardest", "trial": i, "success": float(i < 3)} for i in range(4)])  # final: 0.75
+  db.log_evals("r0", [{"scene": "hardest", "trial": 0, "success": 0.0, "budget": 500}])  # a milestone's
+  db.log_evals("r0", [{"scene": "uniform", "trial": 0, "success": 0.0}])
+  del db
+  for side in ("-wal", "-shm"):
+    (folder / (STUDY_DB + side)).unlink(missing_ok=True)  # as a committed study's file
+  assert summary(str(folder), runs=True)[2].endswith(" 0.75")
+  assert not list(folder.glob(STUDY_DB + "-*"))
+  (run / "eval-hardest.json").write_text(json.dumps({"metrics": {"success": {"mean": 0.5}}}))
+  assert summary(str(folder), runs=True)[2].endswith(" 0.50")  # a study under way: the report
+
+
 def test_a_brax_run_is_evaluated_again_only_once_trained_and_else_trained_from_the_start(tmp_path):
   """Brax writes no checkpoints: a brax cell whose evaluation failed keeps its policy and is only
   evaluated again; one whose training failed is trained again from the start (nothing to resume)."""

@@ -7,9 +7,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sqlite3
 import sys
 
-from train.study.executor import cell_folder_of, overview, read_cells
+from train.core.run_record import run_id_in
+from train.study.executor import STUDY_DB, cell_folder_of, overview, read_cells
 
 
 # state.json's "running" means handed to the cluster: running, or waiting there for a slot (the
@@ -17,11 +19,26 @@ from train.study.executor import cell_folder_of, overview, read_cells
 SHOWN = {"running": "submitted", "queued": "to retry"}
 
 
-def _success(run_folder: str) -> str:
+def _success(folder: str, run_folder: str) -> str:
+  """The run's success on the hardest scene: its report (eval-hardest.json, in a study under way), else
+  the mean of that evaluation's trials in the study's database (a committed study keeps no per-run
+  reports: results/studies/README.md)."""
   path = os.path.join(run_folder, "eval-hardest.json")
-  if not os.path.exists(path):
+  if os.path.exists(path):
+    return f"{json.load(open(path))['metrics']['success']['mean']:.2f}"
+  run_id, db = run_id_in(run_folder), os.path.join(folder, STUDY_DB)
+  if run_id is None or not os.path.exists(db):
     return "-"
-  return f"{json.load(open(path))['metrics']['success']['mean']:.2f}"
+  # read only; a file no study is writing (no write-ahead log beside it) as immutable, so that
+  # reading it leaves no -wal / -shm files beside a committed study
+  live = os.path.exists(db + "-wal")
+  c = sqlite3.connect(f"file:{db}?mode=ro" + ("" if live else "&immutable=1"), uri=True)
+  try:  # the final evaluation's trials (a milestone's carry its budget)
+    (mean,) = c.execute("SELECT avg(success) FROM evals WHERE run_id = ? AND scene = 'hardest' AND budget IS NULL",
+                        (run_id,)).fetchone()
+  finally:
+    c.close()
+  return "-" if mean is None else f"{mean:.2f}"
 
 
 def summary(folder: str, runs: bool = False) -> list[str]:
@@ -35,7 +52,7 @@ def summary(folder: str, runs: bool = False) -> list[str]:
       last = c["attempts"][-1] if c["attempts"] else {}
       shown = SHOWN.get(c["status"], c["status"])
       lines.append(f"{cid:<44} {shown:<10} {len(c['attempts']):>8}  {str(last.get('worker') or '-'):<12} "
-                   f"{_success(cell_folder_of(folder, cid))}")
+                   f"{_success(folder, cell_folder_of(folder, cid))}")
   return lines
 
 
