@@ -3,8 +3,8 @@
 A task's YAML lists the parts it observes (`observation.parts`); one step's observation is their
 concatenation in that order. Each part's size comes from `jax.eval_shape` of its extractor, so a
 part is defined once, here. With `observation.history` k > 1 the policy sees the last k steps'
-observations, newest first (`stack`): a memoryless policy can then tell a robot stuck at a stair
-edge from one arriving there.
+observations, newest first (`stack`), so that a feed-forward policy can see how its readings change
+(what that did in training: docs/sim-to-real.md, "ONNX").
 """
 
 from __future__ import annotations
