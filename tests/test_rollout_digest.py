@@ -1,4 +1,4 @@
-"""mjx_tracks.tools.rollout_digest: what `--write --tasks` keeps of a recorded file."""
+"""mjx_tracks.tools.rollout_digest: what `--write --tasks` keeps of a recorded file; unknown tasks refused."""
 
 import json
 
@@ -23,3 +23,10 @@ def test_a_subset_refuses_a_file_recorded_elsewhere(tmp_path, capsys, device, ve
   with pytest.raises(SystemExit) as e:
     _kept_digests(str(path), HERE, VERSIONS)
   assert e.value.code == 2 and "record every task" in capsys.readouterr().err
+
+
+def test_an_unknown_task_is_refused_in_one_line_before_anything_compiles(capsys):
+  from mjx_tracks.tools.rollout_digest import main
+  with pytest.raises(SystemExit) as e:
+    main(["--check", "unused.json", "--tasks", "asc-inc-cog,nav"])  # a comma list: one unknown name
+  assert e.value.code == 2 and "not among the recorded tasks: asc-inc-cog,nav" in capsys.readouterr().err

@@ -64,6 +64,9 @@ def main(argv=None) -> int:
   g.add_argument("--check", metavar="JSON", help="compare every task's digest with JSON's")
   p.add_argument("--tasks", nargs="+", default=TASKS, help="a subset of the tasks")
   args = p.parse_args(argv)
+  unknown = [t for t in args.tasks if t not in TASKS]
+  if unknown:  # before any compilation; tasks go space-separated
+    p.error(f"--tasks: not among the recorded tasks: {', '.join(unknown)} (known: {' '.join(TASKS)})")
   import jax  # noqa: PLC0415
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
