@@ -27,6 +27,8 @@ def test_the_onnx_policy_matches_the_jax_policy_and_carries_its_layout(ppo_run, 
     cfg = from_dict(json.load(f)["config"])
   env = TrackedRobotEnv(cfg)
   assert [o["name"] for o in meta["observation"]] == observation_names(env)
+  meaning = {o["name"]: o["meaning"] for o in meta["observation"]}  # the tiny task observes 2 steps
+  assert meaning["v@t-1"] == meaning["v"] + ", 1 control step back" and meaning["v"] == "forward speed (m/s)"
   assert [a["name"] for a in meta["action"]] == list(env.controller.dims)
   assert meta["control"]["period_s"] == cfg.control.period and meta["task"] == "asc-inc-cog"
 

@@ -50,8 +50,9 @@ def layout_metadata(cfg) -> dict[str, object]:
   env = TrackedRobotEnv(cfg)
   names = observation_names(env)
   parts = [p for p in cfg.observation.parts for _ in range(env.part_sizes[p])] * cfg.observation.history
-  obs = [{"name": n, "meaning": PARTS[p].doc + (f", {n.rsplit('@t-', 1)[1]} control steps back" if "@t-" in n else "")}
-         for n, p in zip(names, parts)]
+  back = [int(n.rsplit("@t-", 1)[1]) if "@t-" in n else 0 for n in names]  # control steps back (history)
+  obs = [{"name": n, "meaning": PARTS[p].doc + (f", {j} control step{'s' * (j > 1)} back" if j else "")}
+         for n, p, j in zip(names, parts, back)]
   c = env.controller
   lo, hi = c.v_range
   joint = (f"joint target change: -1..1 onto +-{INCREMENT:.4f} rad per control step" if c.increments
