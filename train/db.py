@@ -94,6 +94,19 @@ def _pid_alive(pid: int | None) -> bool:
   return True
 
 
+@contextlib.contextmanager
+def read_only(path: str) -> Iterator[sqlite3.Connection]:
+  """A read-only connection to an existing database file (never creates one), closed on exit. A file
+  no process is writing (no write-ahead log beside it: a finished or committed study's) is opened
+  immutable, so reading it leaves no -wal / -shm files beside it."""
+  live = os.path.exists(path + "-wal")
+  c = sqlite3.connect(f"file:{path}?mode=ro" + ("" if live else "&immutable=1"), uri=True)
+  try:
+    yield c
+  finally:
+    c.close()
+
+
 class ExperimentDB:
   """Thin API over the SQLite file; every call opens its own short transaction."""
 

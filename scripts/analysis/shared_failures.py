@@ -16,10 +16,11 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
-import sqlite3
 import sys
 
 import numpy as np
+
+from train.db import read_only
 
 
 def successes(dbs: list[str], scene: str, task: str) -> dict[str, dict[int, float]]:
@@ -27,8 +28,7 @@ def successes(dbs: list[str], scene: str, task: str) -> dict[str, dict[int, floa
   variant's: task-...) evaluated on scene."""
   out: dict[str, dict[int, float]] = {}
   for db in dbs:
-    # a finished study, read only: no -wal / -shm files made beside it
-    with sqlite3.connect(f"file:{db}?mode=ro&immutable=1", uri=True) as c:
+    with read_only(db) as c:
       rows = c.execute("SELECT e.run_id, e.trial, e.success FROM evals e JOIN experiments x USING (run_id) "
                        "WHERE e.scene = ? AND (x.task = ? OR x.task LIKE ?) AND x.algo != 'baseline'",
                        (scene, task, f"{task}-%")).fetchall()

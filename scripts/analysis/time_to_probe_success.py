@@ -19,7 +19,8 @@ import os
 import sqlite3
 
 from train.core.run_record import run_id_in
-from train.study.executor import cell_folder_of
+from train.db import read_only
+from train.study.executor import STUDY_DB, cell_folder_of
 
 
 def run_bound(c: sqlite3.Connection, run_id: str, attempt_start: float, threshold: float) -> tuple[int, float] | None:
@@ -43,16 +44,15 @@ def main(argv=None) -> int:
   p.add_argument("study", help="a study folder (study.sqlite, runs/*/run.json)")
   p.add_argument("--threshold", type=float, default=0.9, help="probe success (default %(default)s)")
   args = p.parse_args(argv)
-  # read only, as a finished study's file: never creates one, nor -wal / -shm files beside it
-  c = sqlite3.connect(f"file:{os.path.join(args.study, 'study.sqlite')}?mode=ro&immutable=1", uri=True)
-  starts = dict(c.execute("SELECT cell, min(started) FROM attempts GROUP BY cell"))
-  for cell, start in sorted(starts.items()):
-    run_id = run_id_in(cell_folder_of(args.study, cell))
-    if run_id is None or c.execute("SELECT 1 FROM stats WHERE run_id = ? LIMIT 1", (run_id,)).fetchone() is None:
-      continue  # no run record, or a run that never trained (a baseline)
-    found = run_bound(c, run_id, start, args.threshold)
-    print(f"{cell}: " + (f"probe success >= {args.threshold} at step {found[0]:,}, at most {found[1]:.0f} s "
-                         "after the attempt's start" if found else f"no probe >= {args.threshold}, or not finished (no bound)"))
+  with read_only(os.path.join(args.study, STUDY_DB)) as c:
+    starts = dict(c.execute("SELECT cell, min(started) FROM attempts GROUP BY cell"))
+    for cell, start in sorted(starts.items()):
+      run_id = run_id_in(cell_folder_of(args.study, cell))
+      if run_id is None or c.execute("SELECT 1 FROM stats WHERE run_id = ? LIMIT 1", (run_id,)).fetchone() is None:
+        continue  # no run record, or a run that never trained (a baseline)
+      found = run_bound(c, run_id, start, args.threshold)
+      print(f"{cell}: " + (f"probe success >= {args.threshold} at step {found[0]:,}, at most {found[1]:.0f} s "
+                           "after the attempt's start" if found else f"no probe >= {args.threshold}, or not finished (no bound)"))
   return 0
 
 

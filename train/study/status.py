@@ -7,10 +7,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import sqlite3
 import sys
 
 from train.core.run_record import run_id_in
+from train.db import read_only
 from train.study.executor import STUDY_DB, cell_folder_of, overview, read_cells
 
 
@@ -29,15 +29,9 @@ def _success(folder: str, run_folder: str) -> str:
   run_id, db = run_id_in(run_folder), os.path.join(folder, STUDY_DB)
   if run_id is None or not os.path.exists(db):
     return "-"
-  # read only; a file no study is writing (no write-ahead log beside it) as immutable, so that
-  # reading it leaves no -wal / -shm files beside a committed study
-  live = os.path.exists(db + "-wal")
-  c = sqlite3.connect(f"file:{db}?mode=ro" + ("" if live else "&immutable=1"), uri=True)
-  try:  # the final evaluation's trials (a milestone's carry its budget)
+  with read_only(db) as c:  # the final evaluation's trials (a milestone's carry its budget)
     (mean,) = c.execute("SELECT avg(success) FROM evals WHERE run_id = ? AND scene = 'hardest' AND budget IS NULL",
                         (run_id,)).fetchone()
-  finally:
-    c.close()
   return "-" if mean is None else f"{mean:.2f}"
 
 
