@@ -44,15 +44,13 @@ def policy_function(run_dir: str, checkpoint: str | None = None):
 
 def layout_metadata(cfg) -> dict[str, object]:
   """The observation and action layout of a task, for a robot's code (names, meanings, units)."""
-  from mjx_tracks.envs.observations import PARTS  # noqa: PLC0415
-  from mjx_tracks.envs.task_env import TrackedRobotEnv, observation_names  # noqa: PLC0415
+  from mjx_tracks.envs.observations import PARTS, observation_entries  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   from mjx_tracks.sim.control import INCREMENT  # noqa: PLC0415
   env = TrackedRobotEnv(cfg)
-  names = observation_names(env)
-  parts = [p for p in cfg.observation.parts for _ in range(env.part_sizes[p])] * cfg.observation.history
-  back = [int(n.rsplit("@t-", 1)[1]) if "@t-" in n else 0 for n in names]  # control steps back (history)
+  entries = observation_entries(cfg.observation.parts, env.part_sizes, cfg.observation.history)
   obs = [{"name": n, "meaning": PARTS[p].doc + (f", {j} control step{'s' * (j > 1)} back" if j else "")}
-         for n, p, j in zip(names, parts, back)]
+         for n, p, j in entries]
   c = env.controller
   lo, hi = c.v_range
   joint = (f"joint target change: -1..1 onto +-{INCREMENT:.4f} rad per control step" if c.increments

@@ -103,7 +103,13 @@ def stack(current: jax.Array, previous: jax.Array | None, history: int) -> jax.A
   return jnp.concatenate([current, previous[: (history - 1) * current.shape[0]]])
 
 
+def observation_entries(parts: tuple[str, ...], sizes: dict[str, int], history: int = 1) -> list[tuple[str, str, int]]:
+  """(name, part, control steps back) per observation entry, in order; an older step's entries are
+  named NAME@t-j (j steps back)."""
+  one = [(p if sizes[p] == 1 else f"{p}[{i}]", p) for p in parts for i in range(sizes[p])]
+  return [(f"{n}@t-{j}" if j else n, p, j) for j in range(history) for n, p in one]
+
+
 def observation_names(parts: tuple[str, ...], sizes: dict[str, int], history: int = 1) -> list[str]:
-  """One name per observation entry, in order; an older step's entries end in @t-j (j steps back)."""
-  one = [p if sizes[p] == 1 else f"{p}[{i}]" for p in parts for i in range(sizes[p])]
-  return one + [f"{n}@t-{j}" for j in range(1, history) for n in one]
+  """One name per observation entry, in order (observation_entries)."""
+  return [name for name, _, _ in observation_entries(parts, sizes, history)]

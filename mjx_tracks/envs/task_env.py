@@ -281,8 +281,7 @@ class TrackedRobotEnv(Env):
     """The policy's observation: this step's parts, after the previous observation's newer steps
     (observation.history; previous None at reset)."""
     o = self.cfg.observation
-    current = observe(o.parts, self.sensors(es, m, key), self.robot)
-    return current if o.history == 1 else stack(current, previous, o.history)
+    return stack(observe(o.parts, self.sensors(es, m, key), self.robot), previous, o.history)
 
   def _metrics(self, terms, progress, cog, on_stairs, pitch_rate, flags, nan) -> dict[str, jax.Array]:
     f = lambda x: jnp.asarray(x, jnp.float32)
