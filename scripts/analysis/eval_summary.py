@@ -1,0 +1,55 @@
+"""One small table of a few runs' evaluation reports, for results/ (which keeps summaries, not run
+folders): for each run folder, its record (run id, task, algorithm, preset, seed, steps) and, for each
+`eval-*.json` report in it, the scene, the number of trials, the report's command, device and date,
+and the mean of each figure (success, progress, tip-overs, pitch rate, ...). The reports' own
+figures, unchanged; the per-trial rows stay in the reports (re-made by their commands).
+
+    python scripts/analysis/eval_summary.py RUN [RUN ...] --out FILE.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import os
+import sys
+
+RECORD_KEYS = ("run_id", "task", "algo", "preset", "seed", "total_steps")
+REPORT_KEYS = ("trials", "command", "device", "date")
+
+
+def run_summary(run_dir: str) -> dict:
+  """The run's record and the means of each of its evaluation reports, by scene."""
+  with open(os.path.join(run_dir, "run.json")) as f:
+    record = json.load(f)
+  scenes = {}
+  for path in sorted(glob.glob(os.path.join(run_dir, "eval-*.json"))):
+    with open(path) as f:
+      report = json.load(f)
+    scenes[report["scene"]] = {**{k: report.get(k) for k in REPORT_KEYS},
+                               **{name: m["mean"] for name, m in report["metrics"].items()}}
+  if not scenes:
+    raise ValueError(f"{run_dir}: no eval-*.json report (python -m train.evaluate RUN --suite makes them)")
+  return {**{k: record.get(k) for k in RECORD_KEYS}, "scenes": scenes}
+
+
+def main(argv=None) -> int:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("runs", nargs="+", help="run folders")
+  p.add_argument("--out", required=True, help="the summary (JSON)")
+  args = p.parse_args(argv)
+  try:
+    runs = [run_summary(r) for r in args.runs]
+  except (OSError, ValueError, KeyError) as e:
+    print(f"error: {e}", file=sys.stderr)
+    return 2
+  with open(args.out, "w") as f:
+    json.dump({"made_by": "python scripts/analysis/eval_summary.py " + " ".join(args.runs) + f" --out {args.out}",
+               "runs": runs}, f, indent=1)
+  print(f"wrote {args.out}: {len(runs)} runs, {sum(len(r['scenes']) for r in runs)} reports")
+  return 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())
