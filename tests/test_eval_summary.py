@@ -29,7 +29,7 @@ def test_each_report_becomes_one_row_of_its_run_with_the_report_s_means(tmp_path
   out = tmp_path / "summary.json"
   assert main([*runs, "--out", str(out)]) == 0
   got = json.loads(out.read_text())
-  assert [r["seed"] for r in got["runs"]] == [0, 1] and "config" not in got["runs"][0]
+  assert [(r["folder"], r["seed"]) for r in got["runs"]] == [("s0", 0), ("s1", 1)] and "config" not in got["runs"][0]
   assert got["runs"][0]["scenes"]["hardest"]["success"] == 0.75 and got["runs"][0]["scenes"]["hardest/rails"]["success"] == 0.0
   assert got["runs"][1]["scenes"]["hardest"] == {"trials": 4, "command": "python -m train.evaluate RUN --scene hardest",
                                                  "device": "cpu:0", "date": "2026-11-26T00:00:00+00:00",

@@ -1,5 +1,5 @@
 """One small table of a few runs' evaluation reports, for results/ (which keeps summaries, not run
-folders): for each run folder, its record (run id, task, algorithm, preset, seed, steps) and, for each
+folders): for each run folder, its name and record (run id, task, algorithm, preset, seed, steps) and, for each
 `eval-*.json` report in it, the scene, the number of trials, the report's command, device and date,
 and the mean of each figure (success, progress, tip-overs, pitch rate, ...). The reports' own
 figures, unchanged; the per-trial rows stay in the reports (re-made by their commands).
@@ -31,7 +31,8 @@ def run_summary(run_dir: str) -> dict:
                                **{name: m["mean"] for name, m in report["metrics"].items()}}
   if not scenes:
     raise ValueError(f"{run_dir}: no eval-*.json report (python -m train.evaluate RUN --suite makes them)")
-  return {**{k: record.get(k) for k in RECORD_KEYS}, "scenes": scenes}
+  return {"folder": os.path.basename(os.path.normpath(run_dir)), **{k: record.get(k) for k in RECORD_KEYS},
+          "scenes": scenes}
 
 
 def main(argv=None) -> int:
