@@ -8,12 +8,13 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(
 from eval_summary import main  # noqa: E402
 
 
-def _report(folder, scene, success, trials=4):
+def _report(folder, scene, success, trials=4, budget=None):
   per_trial = [1.0] * round(success * trials) + [0.0] * (trials - round(success * trials))
-  report = {"scene": scene, "trials": trials, "command": f"python -m train.evaluate RUN --scene {scene}",
+  report = {"scene": scene, "budget": budget, "trials": trials, "command": f"python -m train.evaluate RUN --scene {scene}",
             "device": "cpu:0", "date": "2026-11-26T00:00:00+00:00", "per_trial": {"success": per_trial},
             "metrics": {"success": {"mean": sum(per_trial) / trials, "std": 0.0}, "progress": {"mean": 0.5, "std": 0.1}}}
-  (folder / f"eval-{scene.replace('/', '-')}.json").write_text(json.dumps(report))
+  name = scene.replace("/", "-") + (f"@{budget}" if budget else "")
+  (folder / f"eval-{name}.json").write_text(json.dumps(report))
 
 
 def test_each_report_becomes_one_row_of_its_run_with_the_report_s_means(tmp_path, capsys):
@@ -26,15 +27,17 @@ def test_each_report_becomes_one_row_of_its_run_with_the_report_s_means(tmp_path
     for scene, success in successes.items():
       _report(run, scene, success)
     runs.append(str(run))
+  _report(tmp_path / "s0", "hardest", 0.25, budget=50)  # a milestone's policy on the same scene: a row of its own
   out = tmp_path / "summary.json"
   assert main([*runs, "--out", str(out)]) == 0
   got = json.loads(out.read_text())
   assert [(r["folder"], r["seed"]) for r in got["runs"]] == [("s0", 0), ("s1", 1)] and "config" not in got["runs"][0]
   assert got["runs"][0]["scenes"]["hardest"]["success"] == 0.75 and got["runs"][0]["scenes"]["hardest/rails"]["success"] == 0.0
+  assert got["runs"][0]["scenes"]["hardest@50"]["success"] == 0.25
   assert got["runs"][1]["scenes"]["hardest"] == {"trials": 4, "command": "python -m train.evaluate RUN --scene hardest",
                                                  "device": "cpu:0", "date": "2026-11-26T00:00:00+00:00",
                                                  "success": 0.5, "progress": 0.5}
-  assert got["made_by"].startswith("python scripts/analysis/eval_summary.py ") and "3 reports" in capsys.readouterr().out
+  assert got["made_by"].startswith("python scripts/analysis/eval_summary.py ") and "4 reports" in capsys.readouterr().out
 
 
 def test_a_run_without_reports_is_refused_in_one_line(tmp_path, capsys):

@@ -1,6 +1,6 @@
 """One small table of a few runs' evaluation reports, for results/ (which keeps summaries, not run
 folders): for each run folder, its name and record (run id, task, algorithm, preset, seed, steps) and, for each
-`eval-*.json` report in it, the scene, the number of trials, the report's command, device and date,
+`eval-*.json` report in it, the scene (SCENE@BUDGET for a milestone's policy), the number of trials, the report's command, device and date,
 and the mean of each figure (success, progress, tip-overs, pitch rate, ...). The reports' own
 figures, unchanged; the per-trial rows stay in the reports (re-made by their commands).
 
@@ -27,8 +27,9 @@ def run_summary(run_dir: str) -> dict:
   for path in sorted(glob.glob(os.path.join(run_dir, "eval-*.json"))):
     with open(path) as f:
       report = json.load(f)
-    scenes[report["scene"]] = {**{k: report.get(k) for k in REPORT_KEYS},
-                               **{name: m["mean"] for name, m in report["metrics"].items()}}
+    at = f"@{report['budget']}" if report.get("budget") else ""  # a milestone's policy (train.run --milestones)
+    scenes[report["scene"] + at] = {**{k: report.get(k) for k in REPORT_KEYS},
+                                    **{name: m["mean"] for name, m in report["metrics"].items()}}
   if not scenes:
     raise ValueError(f"{run_dir}: no eval-*.json report (python -m train.evaluate RUN --suite makes them)")
   return {"folder": os.path.basename(os.path.normpath(run_dir)), **{k: record.get(k) for k in RECORD_KEYS},
