@@ -8,12 +8,12 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(
 from eval_summary import main  # noqa: E402
 
 
-def _report(folder, scene, success, trials=4, budget=None):
+def _report(folder, scene, success, trials=4, budget=None, name=None):
   per_trial = [1.0] * round(success * trials) + [0.0] * (trials - round(success * trials))
   report = {"scene": scene, "budget": budget, "trials": trials, "command": f"python -m train.evaluate RUN --scene {scene}",
             "device": "cpu:0", "date": "2026-11-26T00:00:00+00:00", "per_trial": {"success": per_trial},
             "metrics": {"success": {"mean": sum(per_trial) / trials, "std": 0.0}, "progress": {"mean": 0.5, "std": 0.1}}}
-  name = scene.replace("/", "-") + (f"@{budget}" if budget else "")
+  name = name or scene.replace("/", "-") + (f"@{budget}" if budget else "")
   (folder / f"eval-{name}.json").write_text(json.dumps(report))
 
 
@@ -28,16 +28,18 @@ def test_each_report_becomes_one_row_of_its_run_with_the_report_s_means(tmp_path
       _report(run, scene, success)
     runs.append(str(run))
   _report(tmp_path / "s0", "hardest", 0.25, budget=50)  # a milestone's policy on the same scene: a row of its own
+  _report(tmp_path / "s1", "hardest", 1.0, trials=2, name="hardest.2-trials")  # a shorter evaluation beside it
   out = tmp_path / "summary.json"
   assert main([*runs, "--out", str(out)]) == 0
   got = json.loads(out.read_text())
   assert [(r["folder"], r["seed"]) for r in got["runs"]] == [("s0", 0), ("s1", 1)] and "config" not in got["runs"][0]
   assert got["runs"][0]["scenes"]["hardest"]["success"] == 0.75 and got["runs"][0]["scenes"]["hardest/rails"]["success"] == 0.0
   assert got["runs"][0]["scenes"]["hardest@50"]["success"] == 0.25
+  assert got["runs"][1]["scenes"]["hardest (2 trials)"]["success"] == 1.0
   assert got["runs"][1]["scenes"]["hardest"] == {"trials": 4, "command": "python -m train.evaluate RUN --scene hardest",
                                                  "device": "cpu:0", "date": "2026-11-26T00:00:00+00:00",
                                                  "success": 0.5, "progress": 0.5}
-  assert got["made_by"].startswith("python scripts/analysis/eval_summary.py ") and "4 reports" in capsys.readouterr().out
+  assert got["made_by"].startswith("python scripts/analysis/eval_summary.py ") and "5 reports" in capsys.readouterr().out
 
 
 def test_a_run_without_reports_is_refused_in_one_line(tmp_path, capsys):
@@ -45,3 +47,6 @@ def test_a_run_without_reports_is_refused_in_one_line(tmp_path, capsys):
   assert main([str(tmp_path), "--out", str(tmp_path / "x.json")]) == 2
   err = capsys.readouterr().err
   assert err.count("\n") == 1 and "no eval-*.json report" in err and not (tmp_path / "x.json").exists()
+  _report(tmp_path, "hardest", 0.5)
+  assert main([str(tmp_path), "--out", str(tmp_path / "no-such-folder" / "x.json")]) == 2  # one line, no traceback
+  assert capsys.readouterr().err.startswith("error: ")

@@ -1,6 +1,7 @@
 """One small table of a few runs' evaluation reports, for results/ (which keeps summaries, not run
 folders): for each run folder, its name and record (run id, task, algorithm, preset, seed, steps) and, for each
-`eval-*.json` report in it, the scene (SCENE@BUDGET for a milestone's policy), the number of trials, the report's command, device and date,
+`eval-*.json` report in it, the scene (SCENE@BUDGET for a milestone's policy; a second report of a
+scene with fewer trials as SCENE (N trials)), the number of trials, the report's command, device and date,
 and the mean of each figure (success, progress, tip-overs, pitch rate, ...). The reports' own
 figures, unchanged; the per-trial rows stay in the reports (re-made by their commands).
 
@@ -13,9 +14,10 @@ import argparse
 import glob
 import json
 import os
+import shlex
 import sys
 
-RECORD_KEYS = ("run_id", "task", "algo", "preset", "seed", "total_steps")
+RECORD_KEYS = ("run_id", "task", "algo", "preset", "seed", "total_steps")  # total_steps: the steps asked
 REPORT_KEYS = ("trials", "command", "device", "date")
 
 
@@ -23,13 +25,19 @@ def run_summary(run_dir: str) -> dict:
   """The run's record and the means of each of its evaluation reports, by scene."""
   with open(os.path.join(run_dir, "run.json")) as f:
     record = json.load(f)
-  scenes = {}
+  reports = []
   for path in sorted(glob.glob(os.path.join(run_dir, "eval-*.json"))):
     with open(path) as f:
       report = json.load(f)
-    at = f"@{report['budget']}" if report.get("budget") else ""  # a milestone's policy (train.run --milestones)
-    scenes[report["scene"] + at] = {**{k: report.get(k) for k in REPORT_KEYS},
-                                    **{name: m["mean"] for name, m in report["metrics"].items()}}
+    at = f"@{report['budget']}" if report.get("budget") is not None else ""  # a milestone's policy
+    reports.append((report["scene"] + at, -report["trials"], path, report))
+  scenes = {}
+  for key, _, path, report in sorted(reports):  # of one scene, the report with the most trials first
+    if key in scenes:  # e.g. eval-hardest.10-trials.json beside eval-hardest.json: both kept
+      key += f" ({report['trials']} trials)"
+    if key in scenes:
+      raise ValueError(f"{path}: a second report of {key} in {run_dir}")
+    scenes[key] = {**{k: report.get(k) for k in REPORT_KEYS}, **{name: m["mean"] for name, m in report["metrics"].items()}}
   if not scenes:
     raise ValueError(f"{run_dir}: no eval-*.json report (python -m train.evaluate RUN --suite makes them)")
   return {"folder": os.path.basename(os.path.normpath(run_dir)), **{k: record.get(k) for k in RECORD_KEYS},
@@ -43,12 +51,12 @@ def main(argv=None) -> int:
   args = p.parse_args(argv)
   try:
     runs = [run_summary(r) for r in args.runs]
-  except (OSError, ValueError, KeyError) as e:
+    made_by = shlex.join(["python", "scripts/analysis/eval_summary.py", *args.runs, "--out", args.out])
+    with open(args.out, "w") as f:
+      json.dump({"made_by": made_by, "runs": runs}, f, indent=1)
+  except (OSError, ValueError, KeyError, TypeError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
-  with open(args.out, "w") as f:
-    json.dump({"made_by": "python scripts/analysis/eval_summary.py " + " ".join(args.runs) + f" --out {args.out}",
-               "runs": runs}, f, indent=1)
   print(f"wrote {args.out}: {len(runs)} runs, {sum(len(r['scenes']) for r in runs)} reports")
   return 0
 
