@@ -19,19 +19,25 @@ from train.study.executor import STUDY_DB, cell_folder_of, overview, read_cells
 SHOWN = {"running": "submitted", "queued": "to retry"}
 
 
-def _success(folder: str, run_folder: str) -> str:
+def _database_successes(folder: str) -> dict[str, float]:
+  """{run_id: mean success} of each run's final hardest-scene evaluation in the study's database (a
+  milestone's trials carry its budget and are left out): one read for every line of `--runs`."""
+  db = os.path.join(folder, STUDY_DB)
+  if not os.path.exists(db):
+    return {}
+  with read_only(db) as c:
+    return dict(c.execute("SELECT run_id, avg(success) FROM evals WHERE scene = 'hardest' AND budget IS NULL "
+                          "GROUP BY run_id"))
+
+
+def _success(run_folder: str, in_database: dict[str, float]) -> str:
   """The run's success on the hardest scene: its report (eval-hardest.json, in a study under way), else
   the mean of that evaluation's trials in the study's database (a committed study keeps no per-run
   reports: results/studies/README.md)."""
   path = os.path.join(run_folder, "eval-hardest.json")
   if os.path.exists(path):
     return f"{json.load(open(path))['metrics']['success']['mean']:.2f}"
-  run_id, db = run_id_in(run_folder), os.path.join(folder, STUDY_DB)
-  if run_id is None or not os.path.exists(db):
-    return "-"
-  with read_only(db) as c:  # the final evaluation's trials (a milestone's carry its budget)
-    (mean,) = c.execute("SELECT avg(success) FROM evals WHERE run_id = ? AND scene = 'hardest' AND budget IS NULL",
-                        (run_id,)).fetchone()
+  mean = in_database.get(run_id_in(run_folder))
   return "-" if mean is None else f"{mean:.2f}"
 
 
@@ -42,11 +48,12 @@ def summary(folder: str, runs: bool = False) -> list[str]:
   lines = [f"study {os.path.basename(folder)}: {overview(state)}, {retried} runs retried"]
   if runs:
     lines.append(f"{'run':<44} {'status':<10} {'attempts':>8}  {'last worker':<12} success (hardest)")
+    in_database = _database_successes(folder)
     for cid, c in state.items():
       last = c["attempts"][-1] if c["attempts"] else {}
       shown = SHOWN.get(c["status"], c["status"])
       lines.append(f"{cid:<44} {shown:<10} {len(c['attempts']):>8}  {str(last.get('worker') or '-'):<12} "
-                   f"{_success(folder, cell_folder_of(folder, cid))}")
+                   f"{_success(cell_folder_of(folder, cid), in_database)}")
   return lines
 
 
