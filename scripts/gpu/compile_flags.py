@@ -26,6 +26,11 @@ VARIANTS = {  # name -> XLA_FLAGS added to the environment's
     "autotune-0": "--xla_gpu_autotune_level=0",
     "no-triton-gemm": "--xla_gpu_enable_triton_gemm=false",
     "autotune-0-no-triton-gemm": "--xla_gpu_autotune_level=0 --xla_gpu_enable_triton_gemm=false",
+    # LLVM IR of each program split into parts compiled on several threads (XLA's own option)
+    "parallel": "--xla_gpu_enable_llvm_module_compilation_parallelism=true",
+    "autotune-0-parallel": "--xla_gpu_autotune_level=0 --xla_gpu_enable_llvm_module_compilation_parallelism=true",
+    "autotune-0-parallel-16": "--xla_gpu_autotune_level=0 --xla_gpu_enable_llvm_module_compilation_parallelism=true"
+                              " --xla_gpu_force_compilation_parallelism=16",
 }
 
 
