@@ -26,11 +26,9 @@ VARIANTS = {  # name -> XLA_FLAGS added to the environment's
     "autotune-0": "--xla_gpu_autotune_level=0",
     "no-triton-gemm": "--xla_gpu_enable_triton_gemm=false",
     "autotune-0-no-triton-gemm": "--xla_gpu_autotune_level=0 --xla_gpu_enable_triton_gemm=false",
-    # LLVM IR of each program split into parts compiled on several threads (XLA's own option)
-    "parallel": "--xla_gpu_enable_llvm_module_compilation_parallelism=true",
-    "autotune-0-parallel": "--xla_gpu_autotune_level=0 --xla_gpu_enable_llvm_module_compilation_parallelism=true",
-    "autotune-0-parallel-16": "--xla_gpu_autotune_level=0 --xla_gpu_enable_llvm_module_compilation_parallelism=true"
-                              " --xla_gpu_force_compilation_parallelism=16",
+    # XLA's compilation on 16 threads (jaxlib 0.11 refuses --xla_gpu_enable_llvm_module_compilation_parallelism)
+    "force-16": "--xla_gpu_force_compilation_parallelism=16",
+    "autotune-0-force-16": "--xla_gpu_autotune_level=0 --xla_gpu_force_compilation_parallelism=16",
 }
 
 
@@ -52,7 +50,8 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
          "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite",
          "--hp", "training_metrics_steps=81920"]  # a [train] line (steps/s) every PPO update
   t0 = time.time()
-  out = subprocess.run(cmd, env=env, capture_output=True, text=True).stdout
+  proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+  out = proc.stdout + (f"\n[stderr] {proc.stderr[-400:]}" if proc.returncode else "")  # why a variant failed
   wall = time.time() - t0
   compiled = re.search(r"compiled in ([0-9,]+) s", out)
   rates = [float(x.replace(",", "")) for x in re.findall(r"^\[train\].*?([0-9,]+) steps/s", out, re.M)]
