@@ -7,3 +7,9 @@ FIGURE9 = {
     "des-inc-ang": {"pitch_rate": "0.215 +- 0.15"},
     "des-uni-ang": {"pitch_rate": "0.235 +- 0.14"},
 }
+PAPER_TRIALS = 10  # trials of one policy behind each figure of FIGURE9
+
+
+def paper_figure(task: str) -> str:
+  """The metric the paper judged a task by (ascent: progress; descent: pitch rate), FIGURE9's first."""
+  return next(iter(FIGURE9[task]))

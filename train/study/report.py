@@ -14,7 +14,7 @@ from train.evaluation import ROBUST
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.study.executor import overview
 from train.study.figures import write_figures
-from train.study.paper import FIGURE9
+from train.study.paper import FIGURE9, PAPER_TRIALS, paper_figure
 from mjx_tracks.baselines import BASELINES, CONSTANT, SATURATED, saturated
 from train.study.results import StudyResults, load_results
 from train.study.statistics import LEVEL, REPS, improvement, iqm_intervals
@@ -148,6 +148,22 @@ def paper_table(results: StudyResults) -> list[str]:
   return lines
 
 
+def paper_trials_table(results: StudyResults) -> list[str]:
+  """The paper's own evaluation for each trained group: each seed's policy on its first
+  PAPER_TRIALS trials of the hardest staircase, mean +- sd over those trials of the task's figure
+  (paper.paper_figure), the paper's own figure first."""
+  lines = [f"| task | figure | source | each seed: mean +- sd over its first {PAPER_TRIALS} trials |", "|---|---|---|---|"]
+  for task in (t for t in results.spec.tasks if t in FIGURE9):
+    metric = paper_figure(task)
+    lines.append(f"| {task} | {metric.replace('_', ' ')} | paper (Figure 9, one policy) | {FIGURE9[task][metric]} |")
+    for group, t, budget in results.trained_groups():
+      seeds = results.first_trials(group, task, budget, "hardest", metric, PAPER_TRIALS) if t == task else []
+      if seeds:
+        cells = ", ".join(f"s{s} {_mean_sd(x, 2)}" for s, x in seeds)
+        lines.append(f"| {task} | {metric.replace('_', ' ')} | {group} @ {budget_text(budget)} | {cells} |")
+  return lines
+
+
 SAFETY_FIGURES = ("pitch_rate", "cog_deviation")  # the tasks' own safety figures (mjx_tracks.metrics), lower better
 
 
@@ -243,7 +259,10 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
     out += ["## The paper's Figure 9 side by side", "",
             "The paper evaluated one policy per task with 10 trials on the hardest staircase; here each "
             "seed's policy has its own trials, and the figure is mean +- sd over seeds.", "",
-            *paper_table(results), ""]
+            *paper_table(results), "",
+            f"The paper's evaluation itself, {PAPER_TRIALS} trials of one policy: each seed's first "
+            f"{PAPER_TRIALS} trials on the hardest staircase (by trial index, of its evaluation above), "
+            "mean +- sd over those trials.", "", *paper_trials_table(results), ""]
   out += ["## Figures", ""]
   out += [f"![{name}]({name})" for name in figures]
   return "\n".join(out) + "\n"

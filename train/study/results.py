@@ -76,6 +76,20 @@ class StudyResults:
         out.append(float(np.mean(trials)))
     return np.asarray(out)
 
+  def first_trials(self, group: str, task: str, budget: int, scene: str, metric: str,
+                   n: int) -> list[tuple[int, np.ndarray]]:
+    """(seed, `metric` of its first n trials by trial index) per finished run of the group with at
+    least n trials on the scene: an evaluation of n trials of each seed's policy."""
+    out = []
+    for r in self.runs:
+      if (r.cell.group, r.cell.task) != (group, task) or budget not in r.cell.budgets():
+        continue
+      trials = sorted((e["trial"], e[metric]) for e in r.evals if e["scene"] == scene and e.get(metric) is not None
+                      and (e["budget"] or r.cell.steps) == budget)
+      if len(trials) >= n:
+        out.append((r.cell.seed, np.asarray([v for _, v in trials[:n]], float)))
+    return sorted(out, key=lambda x: x[0])
+
   def curves(self, group: str, task: str, x: str, metric: str) -> list[tuple[np.ndarray, np.ndarray]]:
     """(x, y) of each run of the group on a task: x 'step' or 'wall_s'; rows without y left out."""
     out = []
