@@ -29,6 +29,8 @@ def test_each_report_becomes_one_row_of_its_run_with_the_report_s_means(tmp_path
     runs.append(str(run))
   _report(tmp_path / "s0", "hardest", 0.25, budget=50)  # a milestone's policy on the same scene: a row of its own
   _report(tmp_path / "s1", "hardest", 1.0, trials=2, name="hardest.2-trials")  # a shorter evaluation beside it
+  _report(tmp_path / "s1", "uniform", 0.5, name="uniform")
+  _report(tmp_path / "s1", "uniform", 0.75, name="uniform-again")  # as many trials: named by its file
   out = tmp_path / "summary.json"
   assert main([*runs, "--out", str(out)]) == 0
   got = json.loads(out.read_text())
@@ -36,10 +38,12 @@ def test_each_report_becomes_one_row_of_its_run_with_the_report_s_means(tmp_path
   assert got["runs"][0]["scenes"]["hardest"]["success"] == 0.75 and got["runs"][0]["scenes"]["hardest/rails"]["success"] == 0.0
   assert got["runs"][0]["scenes"]["hardest@50"]["success"] == 0.25
   assert got["runs"][1]["scenes"]["hardest (2 trials)"]["success"] == 1.0
-  assert got["runs"][1]["scenes"]["hardest"] == {"trials": 4, "command": "python -m train.evaluate RUN --scene hardest",
+  assert {k: v["success"] for k, v in got["runs"][1]["scenes"].items() if k.startswith("uniform")} == {
+      "uniform": 0.75, "uniform (eval-uniform.json)": 0.5}  # the first by file name keeps the scene's name
+  assert got["runs"][1]["scenes"]["hardest"] == {"file": "eval-hardest.json", "trials": 4, "command": "python -m train.evaluate RUN --scene hardest",
                                                  "device": "cpu:0", "date": "2026-11-26T00:00:00+00:00",
                                                  "success": 0.5, "progress": 0.5}
-  assert got["made_by"].startswith("python scripts/analysis/eval_summary.py ") and "5 reports" in capsys.readouterr().out
+  assert got["made_by"].startswith("python scripts/analysis/eval_summary.py ") and "7 reports" in capsys.readouterr().out
 
 
 def test_a_run_without_reports_is_refused_in_one_line(tmp_path, capsys):

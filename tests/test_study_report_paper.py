@@ -4,12 +4,14 @@ made-up trials whose means and standard deviations are known by hand."""
 
 import numpy as np
 
-from train.study.paper import PAPER_TRIALS, paper_figure
+import pytest
+
+from train.study.paper import FIGURE9, JUDGED_BY, PAPER_TRIALS, paper_figure
 from train.study.report import paper_trials_table
 from train.study.results import RunResult, StudyResults
 from train.study.spec import cells, study_from_dict
 
-SPEC = study_from_dict({"name": "p", "tasks": ["asc-inc-cog", "des-inc-ang"], "seeds": [3, 4], "baselines": [],
+SPEC = study_from_dict({"name": "p", "tasks": ["asc-inc-cog", "des-inc-ang", "nav"], "seeds": [3, 4], "baselines": [],
                         "groups": [{"name": "sac", "algo": "sac", "preset": "paper", "steps": [100]}]})
 
 
@@ -20,8 +22,10 @@ def _trials(c) -> list[dict]:
     n = 12
   # stored out of order; by index: trials 0-4 progress 0.2, 5-9 0.6, 10-11 1.0 (not among the first 10)
   order = list(range(n))[::-1]
-  return [{"scene": "hardest", "budget": None, "trial": i, "progress": 0.2 if i < 5 else (0.6 if i < 10 else 1.0),
-           "pitch_rate": 0.1 * (i % 2) + 0.3, "success": 0} for i in order]
+  other = [{"scene": "uniform", "budget": None, "trial": i, "progress": 0.0, "pitch_rate": 9.0} for i in range(12)]
+  other += [{"scene": "hardest", "budget": 50, "trial": i, "progress": 0.0, "pitch_rate": 9.0} for i in range(12)]
+  return other + [{"scene": "hardest", "budget": None, "trial": i, "progress": 0.2 if i < 5 else (0.6 if i < 10 else 1.0),
+                   "pitch_rate": 0.1 * (i % 2) + 0.3, "success": 0} for i in order]
 
 
 def _results() -> StudyResults:
@@ -44,4 +48,12 @@ def test_the_table_gives_the_papers_figure_per_task_and_each_seeds_mean_and_sd()
   assert rows[3] == "| asc-inc-cog | progress | sac @ 100 | s3 0.40 +- 0.20, s4 0.40 +- 0.20 |"
   # pitch rate alternates 0.3 / 0.4: mean 0.35, sd 0.05; seed 4 has 9 trials, so only seed 3
   assert rows[5] == "| des-inc-ang | pitch rate | sac @ 100 | s3 0.35 +- 0.05 |"
-  assert len(rows) == 6
+  assert len(rows) == 6  # nav: not one of the paper's tasks
+
+
+def test_each_task_of_figure_9_is_judged_by_one_of_its_figures_and_a_repeated_trial_is_refused():
+  assert JUDGED_BY.keys() == FIGURE9.keys() and all(JUDGED_BY[t] in FIGURE9[t] for t in FIGURE9)
+  r = _results()
+  twice = RunResult(r.runs[0].cell, "twice", [], r.runs[0].evals + r.runs[0].evals[-1:])
+  with pytest.raises(ValueError, match="trial index twice"):
+    StudyResults(SPEC, "/nowhere/p", [twice], r.state).first_trials("sac", "asc-inc-cog", 100, "hardest", "progress", 10)

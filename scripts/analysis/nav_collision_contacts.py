@@ -15,6 +15,8 @@ minutes per run and area.
 python scripts/analysis/nav_collision_contacts.py \
     results/studies/nav/runs/ppo-rings-pen2-goal_nav-obstacles_6000000_s* --areas nav/zigzag \
     --out results/nav/collision-contacts-cpu.json
+(the study's run folders with their reports and policies: `git checkout 236240e --
+results/studies/nav/runs`, or the study run again)
 """
 
 from __future__ import annotations

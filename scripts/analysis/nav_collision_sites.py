@@ -20,6 +20,8 @@ Prints a line per run and area and writes JSON with the device, command and date
 
 python scripts/analysis/nav_collision_sites.py results/studies/nav/runs/ppo_nav-obstacles_6000000_s* \
     --out results/nav/collision-sites-cpu.json
+(the study's run folders with their reports and policies: `git checkout 236240e --
+results/studies/nav/runs`, or the study run again)
 """
 
 from __future__ import annotations

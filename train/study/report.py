@@ -132,7 +132,7 @@ def generalization_table(results: StudyResults) -> list[str]:
 
 
 def paper_table(results: StudyResults) -> list[str]:
-  """The paper's Figure 9 (10 trials on the hardest staircase, one policy each) beside this study's
+  """The paper's Figure 9 (PAPER_TRIALS trials on the hardest staircase, one policy each) beside this study's
   hardest-staircase figures: mean +- sd over seeds of each run's mean over its trials."""
   lines = ["| task | source | progress | COG deviation (m) | pitch rate (rad/s) |", "|---|---|---|---|---|"]
   for task in (t for t in results.spec.tasks if t in FIGURE9):
@@ -155,12 +155,15 @@ def paper_trials_table(results: StudyResults) -> list[str]:
   lines = [f"| task | figure | source | each seed: mean +- sd over its first {PAPER_TRIALS} trials |", "|---|---|---|---|"]
   for task in (t for t in results.spec.tasks if t in FIGURE9):
     metric = paper_figure(task)
-    lines.append(f"| {task} | {metric.replace('_', ' ')} | paper (Figure 9, one policy) | {FIGURE9[task][metric]} |")
+    name = metric.replace("_", " ")
+    rows = []
     for group, t, budget in results.trained_groups():
       seeds = results.first_trials(group, task, budget, "hardest", metric, PAPER_TRIALS) if t == task else []
       if seeds:
         cells = ", ".join(f"s{s} {_mean_sd(x, 2)}" for s, x in seeds)
-        lines.append(f"| {task} | {metric.replace('_', ' ')} | {group} @ {budget_text(budget)} | {cells} |")
+        rows.append(f"| {task} | {name} | {group} @ {budget_text(budget)} | {cells} |")
+    if rows:  # the paper's own figure first
+      lines += [f"| {task} | {name} | paper (Figure 9, one policy) | {FIGURE9[task][metric]} |", *rows]
   return lines
 
 
@@ -257,12 +260,14 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
             "", *general, ""]
   if any(t in FIGURE9 for t in spec.tasks):
     out += ["## The paper's Figure 9 side by side", "",
-            "The paper evaluated one policy per task with 10 trials on the hardest staircase; here each "
+            f"The paper evaluated one policy per task with {PAPER_TRIALS} trials on the hardest staircase; here each "
             "seed's policy has its own trials, and the figure is mean +- sd over seeds.", "",
-            *paper_table(results), "",
-            f"The paper's evaluation itself, {PAPER_TRIALS} trials of one policy: each seed's first "
-            f"{PAPER_TRIALS} trials on the hardest staircase (by trial index, of its evaluation above), "
-            "mean +- sd over those trials.", "", *paper_trials_table(results), ""]
+            *paper_table(results), ""]
+    own = paper_trials_table(results)
+    if len(own) > 2:  # rows beyond the header: some seed has PAPER_TRIALS trials there
+      out += [f"The paper's evaluation itself, {PAPER_TRIALS} trials of one policy: each seed's first "
+              f"{PAPER_TRIALS} trials on the hardest staircase (by trial index, of its evaluation above), "
+              "mean +- sd over those trials.", "", *own, ""]
   out += ["## Figures", ""]
   out += [f"![{name}]({name})" for name in figures]
   return "\n".join(out) + "\n"

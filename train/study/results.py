@@ -86,6 +86,8 @@ class StudyResults:
         continue
       trials = sorted((e["trial"], e[metric]) for e in r.evals if e["scene"] == scene and e.get(metric) is not None
                       and (e["budget"] or r.cell.steps) == budget)
+      if len({i for i, _ in trials}) != len(trials):
+        raise ValueError(f"run {r.run_id}: a trial index twice on {scene} at {budget} steps")
       if len(trials) >= n:
         out.append((r.cell.seed, np.asarray([v for _, v in trials[:n]], float)))
     return sorted(out, key=lambda x: x[0])

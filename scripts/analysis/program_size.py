@@ -1,0 +1,52 @@
+"""How large the programs inside the PPO training step are, by part (issue 30, compile time):
+StableHLO operations and text size of a task's environment step (one robot), its physics substeps
+(`TrackedRobotEnv._advance`), its sensors, the auto-reset's `reset_at`, and the batched step with
+the auto-reset (8 robots), each lowered with `jax.jit(...).lower` (tracing and lowering only,
+nothing compiled). CPU, a few seconds.
+
+    python scripts/analysis/program_size.py [--task asc-inc-cog]
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import re
+import time
+
+import jax
+import jax.numpy as jnp
+
+from mjx_tracks.envs.config import load_config
+from mjx_tracks.envs.task_env import TrackedRobotEnv
+from mjx_tracks.envs.wrappers import batched_env
+
+
+def size(name: str, f, *args) -> None:
+  """Prints the lowered program's operation count (its while loops and calls) and lowering time."""
+  t0 = time.time()
+  text = jax.jit(f).lower(*args).as_text()
+  ops = collections.Counter(re.findall(r"= \"?(stablehlo\.[a-z_]+|func\.call)", text))
+  print(f"{name}: {sum(ops.values()):,} operations (while {ops['stablehlo.while']}, calls {ops['func.call']}), "
+        f"{len(text) / 1e6:.2f} MB of text, traced and lowered in {time.time() - t0:.1f} s", flush=True)
+
+
+def main() -> None:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("--task", default="asc-inc-cog")
+  env = TrackedRobotEnv(load_config(p.parse_args().task))
+  key = jax.random.PRNGKey(0)
+  state = env.reset(key)
+  es = state.pipeline_state
+  model = env._model(es.scene, es.robust)  # noqa: SLF001 (the step's own model of this scene)
+  size("env step (1 robot)", env.step, state, jnp.zeros(env.action_size))
+  size("  physics substeps", lambda s, b, t: env._advance(model, s, b, t), es, jnp.zeros(2), es.targets)  # noqa: SLF001
+  size("  sensors", lambda s, k: env.sensors(s, model, k), es, key)
+  size("reset_at (1 robot)", env.reset_at, key, jnp.float32(0.5), jnp.float32(1.0))
+  batched = batched_env(env)
+  size("batched step with auto-reset (8 robots)", batched.step, batched.reset(jax.random.split(key, 8)),
+       jnp.zeros((8, env.action_size)))
+
+
+if __name__ == "__main__":
+  main()
