@@ -12,12 +12,13 @@ from __future__ import annotations
 import argparse
 import collections
 import re
+import sys
 import time
 
 import jax
 import jax.numpy as jnp
 
-from mjx_tracks.envs.config import load_config
+from mjx_tracks.envs.config import ConfigError, load_config
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
 
@@ -34,7 +35,10 @@ def size(name: str, f, *args) -> None:
 def main() -> None:
   p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   p.add_argument("--task", default="asc-inc-cog")
-  env = TrackedRobotEnv(load_config(p.parse_args().task))
+  try:
+    env = TrackedRobotEnv(load_config(p.parse_args().task))
+  except ConfigError as e:
+    sys.exit(f"error: {e}")
   key = jax.random.PRNGKey(0)
   state = env.reset(key)
   es = state.pipeline_state
