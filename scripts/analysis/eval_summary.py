@@ -1,8 +1,9 @@
 """One small table of a few runs' evaluation reports, for results/ (which keeps summaries, not run
-folders): for each run folder, its path (from the summary's folder) and record (run id, task, algorithm,
-preset, seed, steps) and, for each `eval-*.json` report in it, the scene (SCENE@BUDGET for a milestone's
-policy; a second report of a scene as SCENE (N trials) when it has fewer trials, else SCENE (its file)),
-the report's file, the number of trials, the report's command, device and date, and the mean of each figure (success, progress, tip-overs, pitch rate, ...). The reports' own
+folders): for each run folder, its path (from the summary's folder) and record (run id, task,
+algorithm, preset, seed, steps) and, for each `eval-*.json` report in it, the scene (SCENE@BUDGET for a
+milestone's policy; a second report of a scene as SCENE (N trials) when it has fewer trials, else
+SCENE (its file)), the report's file, the number of trials, the report's command, device and date,
+and the mean of each figure (success, progress, tip-overs, pitch rate, ...). The reports' own
 figures, unchanged; the per-trial rows stay in the reports (re-made by their commands).
 
     python scripts/analysis/eval_summary.py RUN [RUN ...] --out FILE.json

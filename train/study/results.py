@@ -64,28 +64,26 @@ class StudyResults:
     first = [s for s in ("hardest", "uniform") if s in found]
     return first + sorted(found - set(first))
 
+  def _trials(self, group: str, task: str, budget: int, scene: str, metric: str):
+    """(run, its trials' rows on the scene at the budget that hold `metric`) per finished run of the
+    group (a row without the figure: one added after the trials ran)."""
+    for r in self.runs:
+      if (r.cell.group, r.cell.task) == (group, task) and budget in r.cell.budgets():
+        yield r, [e for e in r.evals if e["scene"] == scene and (e["budget"] or r.cell.steps) == budget
+                  and e.get(metric) is not None]
+
   def final(self, group: str, task: str, budget: int, scene: str, metric: str) -> np.ndarray:
     """One figure per finished run (seed) of the group: the mean of `metric` over its trials."""
-    out = []
-    for r in self.runs:
-      if (r.cell.group, r.cell.task) != (group, task) or budget not in r.cell.budgets():
-        continue
-      trials = [e[metric] for e in r.evals if e["scene"] == scene and (e["budget"] or r.cell.steps) == budget
-                and e.get(metric) is not None]  # None: a figure added after the trials ran
-      if trials:
-        out.append(float(np.mean(trials)))
-    return np.asarray(out)
+    return np.asarray([float(np.mean([e[metric] for e in rows]))
+                       for _, rows in self._trials(group, task, budget, scene, metric) if rows])
 
   def first_trials(self, group: str, task: str, budget: int, scene: str, metric: str,
                    n: int) -> list[tuple[int, np.ndarray]]:
     """(seed, `metric` of its first n trials by trial index) per finished run of the group with at
     least n trials on the scene: an evaluation of n trials of each seed's policy."""
     out = []
-    for r in self.runs:
-      if (r.cell.group, r.cell.task) != (group, task) or budget not in r.cell.budgets():
-        continue
-      trials = sorted((e["trial"], e[metric]) for e in r.evals if e["scene"] == scene and e.get(metric) is not None
-                      and (e["budget"] or r.cell.steps) == budget)
+    for r, rows in self._trials(group, task, budget, scene, metric):
+      trials = sorted((e["trial"], e[metric]) for e in rows)
       if len({i for i, _ in trials}) != len(trials):
         raise ValueError(f"run {r.run_id}: a trial index twice on {scene} at {budget} steps")
       if len(trials) >= n:
