@@ -21,6 +21,7 @@ import jax.numpy as jnp
 from mjx_tracks.envs.config import ConfigError, load_config
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
+from mjx_tracks.sim.layout import BELT_SIDE
 
 
 def size(name: str, f, *args) -> None:
@@ -44,7 +45,8 @@ def main() -> None:
   es = state.pipeline_state
   model = env._model(es.scene, es.robust)  # noqa: SLF001 (the step's own model of this scene)
   size("env step (1 robot)", env.step, state, jnp.zeros(env.action_size))
-  size("  physics substeps", lambda s, b, t: env._advance(model, s, b, t), es, jnp.zeros(2), es.targets)  # noqa: SLF001
+  belts = jnp.zeros(len(BELT_SIDE))  # m/s, one speed per belt, as the controller commands
+  size("  physics substeps", lambda s, b, t: env._advance(model, s, b, t), es, belts, es.targets)  # noqa: SLF001
   size("  sensors", lambda s, k: env.sensors(s, model, k), es, key)
   size("reset_at (1 robot)", env.reset_at, key, jnp.float32(0.5), jnp.float32(1.0))
   batched = batched_env(env)
