@@ -49,6 +49,7 @@ def test_the_table_gives_the_papers_figure_per_task_and_each_seeds_mean_and_sd()
   # pitch rate alternates 0.3 / 0.4: mean 0.35, sd 0.05; seed 4 has 9 trials, so only seed 3
   assert rows[5] == "| des-inc-ang | pitch rate | sac @ 100 | s3 0.35 +- 0.05 |"
   assert len(rows) == 6  # nav: not one of the paper's tasks
+  assert paper_trials_table(StudyResults(SPEC, "/nowhere/p", [], {})) == []  # no seed with 10 trials: no table
 
 
 def test_each_task_of_figure_9_is_judged_by_one_of_its_figures_and_a_repeated_trial_is_refused():

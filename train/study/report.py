@@ -151,8 +151,8 @@ def paper_table(results: StudyResults) -> list[str]:
 def paper_trials_table(results: StudyResults) -> list[str]:
   """The paper's own evaluation for each trained group: each seed's policy on its first
   PAPER_TRIALS trials of the hardest staircase, mean +- sd over those trials of the task's figure
-  (paper.paper_figure), the paper's own figure first."""
-  lines = [f"| task | figure | source | each seed: mean +- sd over its first {PAPER_TRIALS} trials |", "|---|---|---|---|"]
+  (paper.paper_figure), the paper's own figure first; no table where no seed has that many."""
+  lines = []
   for task in (t for t in results.spec.tasks if t in FIGURE9):
     metric = paper_figure(task)
     name = metric.replace("_", " ")
@@ -164,7 +164,8 @@ def paper_trials_table(results: StudyResults) -> list[str]:
         rows.append(f"| {task} | {name} | {group} @ {budget_text(budget)} | {cells} |")
     if rows:  # the paper's own figure first
       lines += [f"| {task} | {name} | paper (Figure 9, one policy) | {FIGURE9[task][metric]} |", *rows]
-  return lines
+  head = [f"| task | figure | source | each seed: mean +- sd over its first {PAPER_TRIALS} trials |", "|---|---|---|---|"]
+  return head + lines if lines else []
 
 
 SAFETY_FIGURES = ("pitch_rate", "cog_deviation")  # the tasks' own safety figures (mjx_tracks.metrics), lower better
@@ -264,7 +265,7 @@ def report_text(results: StudyResults, figures: list[str], command: str) -> str:
             "seed's policy has its own trials, and the figure is mean +- sd over seeds.", "",
             *paper_table(results), ""]
     own = paper_trials_table(results)
-    if len(own) > 2:  # rows beyond the header: some seed has PAPER_TRIALS trials there
+    if own:
       out += [f"The paper's evaluation itself, {PAPER_TRIALS} trials of one policy: each seed's first "
               f"{PAPER_TRIALS} trials on the hardest staircase (by trial index, of its evaluation above), "
               "mean +- sd over those trials.", "", *own, ""]
