@@ -87,9 +87,11 @@ def test_mass_payload_and_centre_of_mass_move_the_robots_centre_of_mass(jaguar_s
 
 @pytest.fixture(scope="module")
 def robust_core():
-  """(core, reset(keys, perturbations), step): the stair task with every randomization path compiled."""
+  """(core, reset(keys, perturbations), step): the stair task with every randomization path compiled,
+  observing its belts' encoders last (part belt_speed)."""
   from mjx_tracks.envs.task_env import TrackedRobotEnv
-  core = TrackedRobotEnv(load_config("asc-inc-cog"), every_path=True)
+  parts = [*load_config("asc-inc-cog").observation.parts, "belt_speed"]
+  core = TrackedRobotEnv(load_config("asc-inc-cog", [f"observation.parts=[{', '.join(parts)}]"]), every_path=True)
   reset = jax.jit(jax.vmap(core.reset_at, in_axes=(0, None, None, 0)))
   step = jax.jit(jax.vmap(core.step))
   return core, (lambda keys, p: reset(keys, jnp.float32(0.0), jnp.float32(1.0), p)), step
@@ -106,16 +108,20 @@ def _batch(core, **changes_per_env):
 
 
 def test_gains_delay_and_jitter_act_on_the_physics(robust_core):
-  """Full speed ahead on the flat approach: belt gains 0.8 cover 0.8 of the distance in two control
-  steps; a command one period late leaves the robot where it started after the first step; a
-  jittered period lasts 25 + U{-3..3} substeps (four steps)."""
+  """Full speed ahead on the flat approach: belt gains 0.8 (left) and 0.6 (right) read 0.8 and 0.6 m/s
+  on the encoders (0 at rest) and belt gains 0.8 cover 0.8 of the distance in two control steps; a
+  command one period late leaves the robot where it started after the first step; a jittered period
+  lasts 25 + U{-3..3} substeps (four steps)."""
   core, reset, step = robust_core
-  p = _batch(core, belt_gain=[[1, 1], [0.8, 0.8], [1, 1], [1, 1]], delay=[0, 0, 25, 0], period_jitter=[0, 0, 0, 3])
+  p = _batch(core, belt_gain=[[1, 1], [0.8, 0.8], [1, 1], [0.8, 0.6]], delay=[0, 0, 25, 0], period_jitter=[0, 0, 0, 3])
   keys = jnp.stack([jax.random.PRNGKey(3)] * 4)
   s = reset(keys, p)
+  np.testing.assert_array_equal(np.asarray(s.obs[:, -2:]), 0.0)  # the belts at rest
   x0 = np.asarray(s.pipeline_state.data.qpos[:, 0])
   act = jnp.ones((4, core.action_size)).at[:, 1:].set(0.0)
   s = step(s, act)
+  # v = 1 m/s on both sides (w = 0), times each side's gain: the encoders (the late command's too)
+  np.testing.assert_allclose(np.asarray(s.obs[:, -2:]), [[1, 1], [0.8, 0.8], [1, 1], [0.8, 0.6]], atol=1e-6)
   moved1 = np.asarray(s.pipeline_state.data.qpos[:, 0]) - x0
   times = [np.asarray(s.pipeline_state.data.time)]
   for i in range(3):
@@ -129,6 +135,16 @@ def test_gains_delay_and_jitter_act_on_the_physics(robust_core):
   assert times[-1][0] == pytest.approx(1.0, abs=1e-4)
   steps = np.round(np.diff(np.concatenate([[0.0], np.stack(times)[:, 3]])) / 0.01)
   assert np.all((22 <= steps) & (steps <= 28)) and np.any(steps != 25)
+
+
+def test_the_belt_speed_part_averages_each_sides_belts():
+  """BELT_SIDE order: left track, right track, then the flippers' belts alternating left, right."""
+  from mjx_tracks.envs.observations import PARTS, Sensors
+  from mjx_tracks.robots import get_robot
+  spec = Sensors.spec(6, 0, 0, 0)
+  s = Sensors(*[jnp.zeros(x.shape) for x in jax.tree_util.tree_leaves(spec)[:-1]],
+              belts=jnp.array([1.0, -0.5, 0.4, 0.1, 0.7, 0.3]))
+  np.testing.assert_allclose(PARTS["belt_speed"].extract(s, get_robot(1)), [0.7, -0.1 / 3], rtol=1e-6)
 
 
 def test_a_push_slides_twice_as_far_on_half_the_friction(robust_core):

@@ -17,6 +17,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from mjx_tracks.robots.spec import RobotSpec
+from mjx_tracks.sim.layout import BELT_SIDE
 
 
 @struct.dataclass
@@ -32,12 +33,14 @@ class Sensors:
   vertical_beams: jax.Array  # (N_v,) m
   horizontal_beams: jax.Array  # (N_h,) m
   scan: jax.Array  # (rings x N_s,) m, the laser scan (mjx_tracks.envs.scan)
+  belts: jax.Array  # (n_belts,) m/s, each belt's speed as its motor's encoder reads it (BELT_SIDE order)
 
   @staticmethod
   def spec(n_joints: int, n_vertical: int, n_horizontal: int, n_scan: int) -> "Sensors":
     """Shapes only (for jax.eval_shape)."""
     f = lambda *shape: jax.ShapeDtypeStruct(shape, jnp.float32)
-    return Sensors(f(3), f(3), f(3), f(n_joints), f(3), f(3), f(n_vertical), f(n_horizontal), f(n_scan))
+    return Sensors(f(3), f(3), f(3), f(n_joints), f(3), f(3), f(n_vertical), f(n_horizontal), f(n_scan),
+                   f(len(BELT_SIDE)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,6 +63,13 @@ def _joints(group: str):
   return lambda s, robot: s.joints[robot.joint_index(group)]
 
 
+def _belt_speed(s: Sensors, robot: RobotSpec) -> jax.Array:
+  """(2,) m/s, the mean speed of the left and of the right belts: beside the chassis' forward speed
+  (part v), how much the tracks slip."""
+  left = jnp.asarray(BELT_SIDE) > 0
+  return jnp.stack([jnp.mean(s.belts, where=left), jnp.mean(s.belts, where=~left)])
+
+
 def _flippers_paired(s: Sensors, robot: RobotSpec) -> jax.Array:
   return jnp.stack([s.joints[robot.joint_index("front")].mean(), s.joints[robot.joint_index("rear")].mean()])
 
@@ -77,6 +87,8 @@ PARTS: dict[str, ObsPart] = {
     "angular_velocity": ObsPart("chassis angular velocity (rad/s)", lambda s, r: s.angular_velocity),
     "vertical_beams": ObsPart("vertical depth beams (m)", lambda s, r: s.vertical_beams),
     "horizontal_beams": ObsPart("horizontal depth beams (m)", lambda s, r: s.horizontal_beams),
+    "belt_speed": ObsPart("mean left and mean right belt speed, as the belt motors' encoders read them (m/s)",
+                          _belt_speed),
     "scan": ObsPart("laser scan around the chassis, ray j N_s + k at yaw 2 pi k / N_s in ring j (m)", lambda s, r: s.scan),
 }
 

@@ -117,7 +117,9 @@ class TrackedRobotEnv(Env):
     es: EnvState = state.pipeline_state
     m = self._model(es.scene, es.robust)
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
-    data, collided, robust = self._advance(m, es, self.controller.belt_speeds(v, w), targets)
+    belts = self.controller.belt_speeds(v, w)
+    data, collided, robust = self._advance(m, es, belts, targets)
+    belts = belts if robust is None else robust.belts  # what the belts' encoders read: their gains applied
     data = self._sense(m, data)
     # a physics blow-up ends the episode and keeps the last finite state
     finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
@@ -146,7 +148,7 @@ class TrackedRobotEnv(Env):
     metrics = {**state.metrics,
                **self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)}
     reward = sum(terms.values())
-    return state.replace(pipeline_state=es, obs=self._obs(es, m, k_obs, state.obs), reward=reward,
+    return state.replace(pipeline_state=es, obs=self._obs(es, m, k_obs, state.obs, belts), reward=reward,
                          done=terminated.astype(jnp.float32), metrics=metrics)
 
   # --- the curriculum wrapper's reset -------------------------------------------------------
@@ -258,8 +260,9 @@ class TrackedRobotEnv(Env):
     dev = cog_deviation(d.subtree_com[body], d.xpos[body], jnp.arctan2(st.riser, st.tread))
     return jnp.where(on, dev, 0.0), on.astype(jnp.float32)
 
-  def sensors(self, es: EnvState, m: mjx.Model, key: jax.Array) -> Sensors:
-    """Every reading an observation part may use (mjx_tracks.envs.observations)."""
+  def sensors(self, es: EnvState, m: mjx.Model, key: jax.Array, belts: jax.Array | None = None) -> Sensors:
+    """Every reading an observation part may use (mjx_tracks.envs.observations); belts: the belt
+    speeds the last control step ran (m/s; None: at rest, as at reset)."""
     d, r = es.data, es.robust
     real = {} if r is None else {"pitch": r.perturbation.camera_pitch, "range_noise": r.perturbation.depth_noise,
                                  "hidden": r.perturbation.hidden}
@@ -275,13 +278,14 @@ class TrackedRobotEnv(Env):
     return Sensors(linear_velocity=velocity, angular_velocity=rate, rpy=rpy, joints=joints,
                    position=d.qpos[0:3], goal=es.scene.goal,
                    vertical_beams=beams[: self.beams.n_vertical], horizontal_beams=beams[self.beams.n_vertical:],
-                   scan=ranges)
+                   scan=ranges, belts=jnp.zeros(len(BELT_SIDE)) if belts is None else belts)
 
-  def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array, previous: jax.Array | None = None) -> jax.Array:
+  def _obs(self, es: EnvState, m: mjx.Model, key: jax.Array, previous: jax.Array | None = None,
+           belts: jax.Array | None = None) -> jax.Array:
     """The policy's observation: this step's parts, after the previous observation's newer steps
-    (observation.history; previous None at reset)."""
+    (observation.history; previous None at reset); belts as for sensors."""
     o = self.cfg.observation
-    return stack(observe(o.parts, self.sensors(es, m, key), self.robot), previous, o.history)
+    return stack(observe(o.parts, self.sensors(es, m, key, belts), self.robot), previous, o.history)
 
   def _metrics(self, terms, progress, cog, on_stairs, pitch_rate, flags, nan) -> dict[str, jax.Array]:
     f = lambda x: jnp.asarray(x, jnp.float32)
