@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from mjx_tracks.tools.rollout_digest import _kept_digests
+from mjx_tracks.tools.rollout_digest import _kept_digests, cpu_features, cpu_note
 
 HERE, VERSIONS = "cpu (cpu)", {"jax": "1", "jaxlib": "1", "mujoco": "2", "mujoco-mjx": "3"}
 
@@ -30,3 +30,16 @@ def test_an_unknown_task_is_refused_in_one_line_before_anything_compiles(capsys)
   with pytest.raises(SystemExit) as e:
     main(["--check", "unused.json", "--tasks", "asc-inc-cog,nav"])  # a comma list: one unknown name
   assert e.value.code == 2 and "not among the recorded tasks: asc-inc-cog,nav" in capsys.readouterr().err
+
+
+def test_the_cpus_vector_instruction_sets_are_read_from_cpuinfo_and_a_check_on_another_cpu_says_so(tmp_path):
+  info = tmp_path / "cpuinfo"
+  info.write_text("processor\t: 0\nflags\t\t: fpu sse4_2 avx2 fma avx avx512f f16c amx_tile\n\n"
+                  "processor\t: 1\nflags\t\t: fpu avx\n")
+  assert cpu_features(str(info)) == ["amx_tile", "avx", "avx2", "avx512f", "f16c", "fma"]  # the first processor's
+  assert cpu_features(str(tmp_path / "absent")) == []
+  mine = ["avx", "avx2", "fma"]
+  assert cpu_note({"cpu_features": mine}, HERE, mine) is None
+  assert "digests may differ for the CPU alone" in cpu_note({"cpu_features": ["avx"]}, HERE, mine)
+  assert "(not recorded)" in cpu_note({}, HERE, mine)
+  assert cpu_note({}, "gpu (H100)", mine) is None  # a GPU's digests do not depend on the host CPU's

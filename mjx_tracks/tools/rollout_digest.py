@@ -8,7 +8,10 @@ Each task runs N_ENVS robots for N_STEPS control steps from a fixed key, with ac
 from that key, and episodes cut at EPISODE_STEPS steps so that the curriculum's reset runs inside
 the rollout. The digest is the SHA-256 of every step's observation, reward, done flag, metrics,
 positions (qpos) and scene (boxes, spawn, goal, parameters), as float32 bytes. A refactor that changes no behaviour keeps every digest. Digests are
-compared on the platform they were recorded on (floating point differs between CPU and GPU).
+compared on the platform they were recorded on (floating point differs between CPU and GPU), and
+on the CPU between hosts of other instruction sets (XLA compiles for the host's): the file records
+the CPU's (`cpu_features`) and a check on another says so. Record on the machine at hand before a
+change, check after it.
 """
 
 from __future__ import annotations
@@ -76,11 +79,13 @@ def main(argv=None) -> int:
     print(f"error: {args.check} was recorded on {recorded.get('device')}, this is {here}: the digests are bit "
           "for bit and differ between platforms; record one here with --write", file=sys.stderr)
     return 2
-  versions = _versions()
+  versions, features = _versions(), cpu_features()
   if args.check and recorded.get("versions", {}) != versions:
     print(f"note: recorded with {recorded.get('versions', 'unknown packages')}, this is {versions}: the "
           "digests may differ for the packages alone (record one with --write before changing code)",
           file=sys.stderr)
+  if args.check and (note := cpu_note(recorded, here, features)):
+    print(note, file=sys.stderr)
   digests, differ = {}, []
   for task in args.tasks:
     digests[task] = rollout_digest(task)
@@ -91,7 +96,7 @@ def main(argv=None) -> int:
     kept = _kept_digests(args.write, here, versions) if set(args.tasks) != set(TASKS) else {}
     digests = {t: digests.get(t, kept.get(t)) for t in TASKS if t in digests or t in kept}
     record = {"what": __doc__.split("\n\n")[0], "command": "python -m mjx_tracks.tools.rollout_digest --write " + args.write,
-              "device": here, "jax": jax.__version__, "versions": versions,
+              "device": here, "cpu_features": features, "jax": jax.__version__, "versions": versions,
               "n_envs": N_ENVS, "n_steps": N_STEPS, "episode_steps": EPISODE_STEPS, "seed": SEED, "digests": digests}
     with open(args.write, "w") as f:
       json.dump(record, f, indent=1)
@@ -112,6 +117,26 @@ def _kept_digests(path: str, here: str, versions: dict) -> dict[str, str]:
           f"{versions}: record every task (--write without --tasks)", file=sys.stderr)
     sys.exit(2)
   return old["digests"]
+
+
+def cpu_features(cpuinfo: str = "/proc/cpuinfo") -> list[str]:
+  """The host CPU's vector instruction sets that XLA's CPU code generation may use (flags of the
+  first processor in `cpuinfo`: avx*, fma, f16c, amx*), sorted; [] where the file is absent."""
+  try:
+    text = open(cpuinfo).read()
+  except OSError:
+    return []
+  flags = next((line.split(":", 1)[1].split() for line in text.splitlines() if line.startswith("flags")), [])
+  return sorted(f for f in set(flags) if f.startswith(("avx", "amx")) or f in ("fma", "f16c"))
+
+
+def cpu_note(recorded: dict, here: str, features: list[str]) -> str | None:
+  """A note where a CPU digest file was recorded on a CPU of other instruction sets (or of unknown ones)."""
+  if not here.startswith("cpu") or recorded.get("cpu_features") == features:
+    return None
+  return (f"note: recorded on a CPU with instruction sets {recorded.get('cpu_features', '(not recorded)')}, this one "
+          f"has {features}: XLA compiles for the host's, so the digests may differ for the CPU alone (record one "
+          "here with --write before changing code)")
 
 
 def _versions() -> dict[str, str]:
