@@ -17,6 +17,7 @@ change, check after it.
 from __future__ import annotations
 
 import argparse
+import datetime
 import hashlib
 import json
 import os
@@ -96,7 +97,8 @@ def main(argv=None) -> int:
     kept = _kept_digests(args.write, here, versions) if set(args.tasks) != set(TASKS) else {}
     digests = {t: digests.get(t, kept.get(t)) for t in TASKS if t in digests or t in kept}
     record = {"what": __doc__.split("\n\n")[0], "command": "python -m mjx_tracks.tools.rollout_digest --write " + args.write,
-              "device": here, "cpu_features": features, "jax": jax.__version__, "versions": versions,
+              "device": here, "cpu_features": features, "date": datetime.datetime.now(datetime.timezone.utc).isoformat(),
+              "jax": jax.__version__, "versions": versions,
               "n_envs": N_ENVS, "n_steps": N_STEPS, "episode_steps": EPISODE_STEPS, "seed": SEED, "digests": digests}
     with open(args.write, "w") as f:
       json.dump(record, f, indent=1)
