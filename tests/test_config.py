@@ -1,10 +1,11 @@
 """Task configs: every task loads; unknown keys, wrong types and bad values fail naming the key."""
 
+import pathlib
 import re
 
 import pytest
 
-from mjx_tracks.envs.config import ConfigError, available_tasks, default_config, from_dict, load_config
+from mjx_tracks.envs.config import ConfigError, available_tasks, config_dir, default_config, from_dict, load_config
 
 PAPER_TASKS = {"asc-inc-cog", "asc-uni-cog", "des-inc-ang", "des-uni-ang"}
 
@@ -62,6 +63,21 @@ def test_defaults_file_is_not_a_task_and_holds_every_key():
     load_config("defaults")
   cfg = default_config()  # every dataclass field must have its default there, or this fails
   assert cfg.scene.variant == "difficulty" and cfg.observation.parts == load_config("asc-inc-cog").observation.parts
+
+
+def test_the_yaml_is_read_beside_the_package_that_runs_installed_or_from_a_checkout(tmp_path):
+  """Installed: the package data mjx_tracks/configs; a source checkout: the repository's configs/,
+  whichever checkout an editable install maps the package data to; neither: one line saying so."""
+  installed, checkout = tmp_path / "site" / "mjx_tracks", tmp_path / "repo" / "mjx_tracks"
+  for folder in (installed / "configs", checkout.parent / "configs"):
+    folder.mkdir(parents=True)
+    (folder / "defaults.yaml").write_text("{}")
+  checkout.mkdir()
+  assert config_dir(installed) == installed / "configs" and config_dir(checkout) == checkout.parent / "configs"
+  with pytest.raises(FileNotFoundError, match="no defaults.yaml in .* the install is incomplete"):
+    config_dir(tmp_path / "bare" / "mjx_tracks")
+  import mjx_tracks
+  assert config_dir() == pathlib.Path(mjx_tracks.__file__).resolve().parents[1] / "configs"  # this checkout's
 
 
 def test_a_run_config_missing_a_key_names_it():

@@ -50,6 +50,6 @@ def test_every_layout_keeps_a_way_round_its_floor_obstacles_and_without_the_sett
 
 def test_a_layout_without_a_way_round_is_rare_and_its_obstacles_are_parked_off_the_area():
   parked = [s for s in layouts(0.5, 400) if (s.box_pos[WALL_OBSTACLES:, 2] < -1).any()]
-  assert len(parked) <= 12  # 4 draws without a way round: 1.1 % of 4,000 scenes
+  assert len(parked) <= 12  # 4 draws without a way round: 1.5 % of 4,000 scenes (results/nav/floor-turn-passage05-cpu.json)
   for s in parked:
     assert (s.box_pos[WALL_OBSTACLES:, 0] < -19).all() and (s.box_pos[WALL_OBSTACLES:, 2] < -1).all()

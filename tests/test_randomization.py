@@ -110,8 +110,8 @@ def _batch(core, **changes_per_env):
 def test_gains_delay_and_jitter_act_on_the_physics(robust_core):
   """Full speed ahead on the flat approach: belt gains 0.8 (left) and 0.6 (right) read 0.8 and 0.6 m/s
   on the encoders (0 at rest) and belt gains 0.8 cover 0.8 of the distance in two control steps; a
-  command one period late leaves the robot where it started after the first step; a jittered period
-  lasts 25 + U{-3..3} substeps (four steps)."""
+  command one period late leaves the robot where it started after the first step, its encoders at
+  rest; a jittered period lasts 25 + U{-3..3} substeps (four steps)."""
   core, reset, step = robust_core
   p = _batch(core, belt_gain=[[1, 1], [0.8, 0.8], [1, 1], [0.8, 0.6]], delay=[0, 0, 25, 0], period_jitter=[0, 0, 0, 3])
   keys = jnp.stack([jax.random.PRNGKey(3)] * 4)
@@ -120,8 +120,9 @@ def test_gains_delay_and_jitter_act_on_the_physics(robust_core):
   x0 = np.asarray(s.pipeline_state.data.qpos[:, 0])
   act = jnp.ones((4, core.action_size)).at[:, 1:].set(0.0)
   s = step(s, act)
-  # v = 1 m/s on both sides (w = 0), times each side's gain: the encoders (the late command's too)
-  np.testing.assert_allclose(np.asarray(s.obs[:, -2:]), [[1, 1], [0.8, 0.8], [1, 1], [0.8, 0.6]], atol=1e-6)
+  # v = 1 m/s on both sides (w = 0), times each side's gain, on the encoders; the late one still runs
+  # the command before it (at rest) at the period's end
+  np.testing.assert_allclose(np.asarray(s.obs[:, -2:]), [[1, 1], [0.8, 0.8], [0, 0], [0.8, 0.6]], atol=1e-6)
   moved1 = np.asarray(s.pipeline_state.data.qpos[:, 0]) - x0
   times = [np.asarray(s.pipeline_state.data.time)]
   for i in range(3):

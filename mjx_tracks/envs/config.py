@@ -10,7 +10,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import functools
-import importlib.resources
 import itertools
 import math
 import pathlib
@@ -32,13 +31,17 @@ from scenes.terrain_kinds import TERRAIN_PARAMS
 DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
 
 
-def config_dir():
-  """The task YAML files: package data `mjx_tracks.configs` once installed, else (a source
-  checkout on PYTHONPATH) the repository's configs/."""
-  try:
-    return importlib.resources.files("mjx_tracks.configs")
-  except ModuleNotFoundError:
-    return pathlib.Path(__file__).resolve().parents[2] / "configs"
+def config_dir(package: pathlib.Path | None = None) -> pathlib.Path:
+  """The task YAML files beside the mjx_tracks package that runs (`package`, default this one):
+  its package data configs/ once installed, else the source checkout's configs/ (the repository's
+  top level). Never another checkout's: an editable install of one tree maps the package data to
+  that tree, and a second tree on PYTHONPATH must still read its own YAML."""
+  package = pathlib.Path(__file__).resolve().parents[1] if package is None else package
+  for folder in (package / "configs", package.parent / "configs"):
+    if (folder / f"{DEFAULTS}.yaml").is_file():
+      return folder
+  raise FileNotFoundError(f"no {DEFAULTS}.yaml in {package / 'configs'} (installed) or {package.parent / 'configs'} "
+                          "(a source checkout): the install is incomplete")
 
 
 class ConfigError(ValueError):

@@ -117,9 +117,7 @@ class TrackedRobotEnv(Env):
     es: EnvState = state.pipeline_state
     m = self._model(es.scene, es.robust)
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
-    belts = self.controller.belt_speeds(v, w)
-    data, collided, robust = self._advance(m, es, belts, targets)
-    belts = belts if robust is None else robust.belts  # what the belts' encoders read: their gains applied
+    data, collided, robust, belts = self._advance(m, es, self.controller.belt_speeds(v, w), targets)
     data = self._sense(m, data)
     # a physics blow-up ends the episode and keeps the last finite state
     finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
@@ -190,18 +188,21 @@ class TrackedRobotEnv(Env):
     return m
 
   def _advance(self, m: mjx.Model, es: EnvState, belts: jax.Array, targets: jax.Array):
-    """(data, collided, robust state) after one control period with the command (belt speeds m/s,
-    joint targets rad); with randomization: belt gains and friction, a push, a late command and a
-    jittered period (mjx_tracks.envs.randomization)."""
+    """(data, collided, robust state, belt speeds at the period's end: what the belts' encoders
+    read, m/s) after one control period with the command (belt speeds m/s, joint targets rad); with
+    randomization: belt gains and friction, a push, a late command and a jittered period
+    (mjx_tracks.envs.randomization)."""
     data, n, late, robust = es.data, self.substeps, {}, es.robust
+    ran = belts
     if robust is not None:
       p = robust.perturbation
       k_push, k_period = jax.random.split(jax.random.fold_in(es.key, 11))  # beside the paper's stream
-      belts = belts * rnd.belt_gains(p, BELT_SIDE)
+      belts = ran = belts * rnd.belt_gains(p, BELT_SIDE)
       late["mu_scale"] = p.friction
       if "timing" in self.acting:
         late.update(held=(robust.belts, es.targets), delay=p.delay)
         n = rnd.period_substeps(p, self.substeps, k_period)
+        ran = jnp.where(p.delay >= n, robust.belts, belts)  # a command late for the whole period never ran
       if "push" in self.acting:
         data = data.replace(qvel=rnd.push(data.qvel, p, k_push)[0])
       robust = robust.replace(belts=belts)
@@ -209,7 +210,7 @@ class TrackedRobotEnv(Env):
       data, collided = self.sim.advance_watching(m, data, belts, targets, n, self.watch, **late)
     else:
       data, collided = self.sim.advance(m, data, belts, targets, n, **late), jnp.bool_(False)
-    return data, collided, robust
+    return data, collided, robust, ran
 
   def _start(self, scene: SceneState, key: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """The robot's start: the scene's spawn (ground point, yaw) and joints at control.start_pose (0
@@ -262,7 +263,8 @@ class TrackedRobotEnv(Env):
 
   def sensors(self, es: EnvState, m: mjx.Model, key: jax.Array, belts: jax.Array | None = None) -> Sensors:
     """Every reading an observation part may use (mjx_tracks.envs.observations); belts: the belt
-    speeds the last control step ran (m/s; None: at rest, as at reset)."""
+    speeds at the end of the last control period (m/s, as _advance gives them; None: at rest, as at
+    reset)."""
     d, r = es.data, es.robust
     real = {} if r is None else {"pitch": r.perturbation.camera_pitch, "range_noise": r.perturbation.depth_noise,
                                  "hidden": r.perturbation.hidden}

@@ -8,10 +8,10 @@ Each task runs N_ENVS robots for N_STEPS control steps from a fixed key, with ac
 from that key, and episodes cut at EPISODE_STEPS steps so that the curriculum's reset runs inside
 the rollout. The digest is the SHA-256 of every step's observation, reward, done flag, metrics,
 positions (qpos) and scene (boxes, spawn, goal, parameters), as float32 bytes. A refactor that changes no behaviour keeps every digest. Digests are
-compared on the platform they were recorded on (floating point differs between CPU and GPU), and
-on the CPU between hosts of other instruction sets (XLA compiles for the host's): the file records
-the CPU's (`cpu_features`) and a check on another says so. Record on the machine at hand before a
-change, check after it.
+compared on the platform they were recorded on (floating point differs between CPU and GPU). On
+the CPU they also differ between hosts of other instruction sets (XLA compiles for the host's): the
+file records the CPU's (`cpu_features`) and a check on another says so. Record on the machine at
+hand before a change, check after it.
 """
 
 from __future__ import annotations
@@ -122,14 +122,16 @@ def _kept_digests(path: str, here: str, versions: dict) -> dict[str, str]:
 
 
 def cpu_features(cpuinfo: str = "/proc/cpuinfo") -> list[str]:
-  """The host CPU's vector instruction sets that XLA's CPU code generation may use (flags of the
-  first processor in `cpuinfo`: avx*, fma, f16c, amx*), sorted; [] where the file is absent."""
+  """The host CPU's vector instruction sets that XLA's CPU code generation may use (the first
+  processor's `flags` in `cpuinfo`: avx*, fma, f16c, amx*; on Arm its `Features`: asimd*, sve*, sme*),
+  sorted; [] where the file is absent."""
   try:
     text = open(cpuinfo).read()
   except OSError:
     return []
-  flags = next((line.split(":", 1)[1].split() for line in text.splitlines() if line.startswith("flags")), [])
-  return sorted(f for f in set(flags) if f.startswith(("avx", "amx")) or f in ("fma", "f16c"))
+  flags = next((line.split(":", 1)[1].split() for line in text.splitlines()
+                if line.startswith(("flags", "Features"))), [])
+  return sorted(f for f in set(flags) if f.startswith(("avx", "amx", "asimd", "sve", "sme")) or f in ("fma", "f16c"))
 
 
 def cpu_note(recorded: dict, here: str, features: list[str]) -> str | None:
