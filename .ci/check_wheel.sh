@@ -15,8 +15,9 @@ cd "$tmp"
 PYTHONPATH="$tmp/site" JAX_PLATFORMS=cpu python3 - "$tmp/site" <<'PY'
 import sys
 import mjx_tracks
-from mjx_tracks.envs.config import available_tasks, load_config
+from mjx_tracks.envs.config import available_tasks, config_dir, load_config
 assert mjx_tracks.__file__.startswith(sys.argv[1]), f"imported {mjx_tracks.__file__}, not the wheel"
+assert str(config_dir()).startswith(sys.argv[1]), f"configs read from {config_dir()}, not the wheel's"
 tasks = available_tasks()
 assert "asc-inc-cog" in tasks, tasks
 cfg = load_config("asc-inc-cog")
