@@ -34,12 +34,12 @@ def test_an_unknown_task_is_refused_in_one_line_before_anything_compiles(capsys)
 
 def test_the_cpus_vector_instruction_sets_are_read_from_cpuinfo_and_a_check_on_another_cpu_says_so(tmp_path):
   info = tmp_path / "cpuinfo"
-  info.write_text("processor\t: 0\nflags\t\t: fpu sse4_2 avx2 fma avx avx512f f16c amx_tile\n\n"
+  info.write_text("processor\t: 0\nflags\t\t: fpu sse4_2 avx2 fma avx avx512f f16c amx_tile smep\n\n"
                   "processor\t: 1\nflags\t\t: fpu avx\n")
   assert cpu_features(str(info)) == ["amx_tile", "avx", "avx2", "avx512f", "f16c", "fma"]  # the first processor's
   assert cpu_features(str(tmp_path / "absent")) == []
-  info.write_text("processor\t: 0\nFeatures\t: fp asimd sve2 crc32\n")  # an Arm host's
-  assert cpu_features(str(info)) == ["asimd", "sve2"]
+  info.write_text("processor\t: 0\nFeatures\t: fp asimd sve2 sme crc32\n")  # an Arm host's
+  assert cpu_features(str(info)) == ["asimd", "sme", "sve2"]
   mine = ["avx", "avx2", "fma"]
   assert cpu_note({"cpu_features": mine}, HERE, mine) is None
   assert "digests may differ for the CPU alone" in cpu_note({"cpu_features": ["avx"]}, HERE, mine)

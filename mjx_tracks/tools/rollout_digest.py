@@ -123,15 +123,15 @@ def _kept_digests(path: str, here: str, versions: dict) -> dict[str, str]:
 
 def cpu_features(cpuinfo: str = "/proc/cpuinfo") -> list[str]:
   """The host CPU's vector instruction sets that XLA's CPU code generation may use (the first
-  processor's `flags` in `cpuinfo`: avx*, fma, f16c, amx*; on Arm its `Features`: asimd*, sve*, sme*),
-  sorted; [] where the file is absent."""
+  processor's `flags` in `cpuinfo`: avx*, fma, f16c, amx*; on Arm its `Features`: asimd*, sve*, sme,
+  sme2; not x86's smep, a protection flag), sorted; [] where the file is absent."""
   try:
     text = open(cpuinfo).read()
   except OSError:
     return []
   flags = next((line.split(":", 1)[1].split() for line in text.splitlines()
                 if line.startswith(("flags", "Features"))), [])
-  return sorted(f for f in set(flags) if f.startswith(("avx", "amx", "asimd", "sve", "sme")) or f in ("fma", "f16c"))
+  return sorted(f for f in set(flags) if f.startswith(("avx", "amx", "asimd", "sve")) or f in ("fma", "f16c", "sme", "sme2"))
 
 
 def cpu_note(recorded: dict, here: str, features: list[str]) -> str | None:
