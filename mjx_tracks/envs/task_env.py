@@ -27,7 +27,7 @@ from mjx_tracks.sim.collisions import CollisionWatch, footprint_half
 from mjx_tracks.sim.control import Controller
 from mjx_tracks.sim.layout import BELT_SIDE
 from mjx_tracks.sim.pose import chassis_rpy
-from mjx_tracks.sim.simulator import Simulator
+from mjx_tracks.sim.simulator import Simulator, runs_late_command
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
 from scenes.samplers import Draw
@@ -202,7 +202,7 @@ class TrackedRobotEnv(Env):
       if "timing" in self.acting:
         late.update(held=(robust.belts, es.targets), delay=p.delay)
         n = rnd.period_substeps(p, self.substeps, k_period)
-        ran = jnp.where(p.delay >= n, robust.belts, belts)  # a command late for the whole period never ran
+        ran = jnp.where(runs_late_command(n - 1, p.delay), robust.belts, belts)  # the period's last substep's
       if "push" in self.acting:
         data = data.replace(qvel=rnd.push(data.qvel, p, k_push)[0])
       robust = robust.replace(belts=belts)

@@ -29,6 +29,12 @@ def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax
                           lambda m, d, slip: aref_shift(m, d, tm, slip))
 
 
+def runs_late_command(substep, delay) -> jax.Array:
+  """Whether substep `substep` (0-based) of a control period still runs the previous command, the
+  new one being `delay` substeps late."""
+  return substep < delay
+
+
 def yaw_quat(yaw: jax.Array) -> jax.Array:
   """Unit quaternions (w, x, y, z) of rotations by yaw (rad) about z; shape (..., 4)."""
   z = jnp.zeros_like(yaw)
@@ -117,7 +123,7 @@ class Simulator:
       x, hit = carry
       b = belts
       if held is not None:
-        late = i < delay
+        late = runs_late_command(i, delay)
         b = jnp.where(late, held[0], belts)
         x = x.replace(ctrl=jnp.where(late, held[1], targets))
       x = self.substep(m, x, b, mu_scale)

@@ -27,6 +27,7 @@ import numpy as np
 from mjx_tracks import atomic
 from mjx_tracks.envs.config import from_dict
 from mjx_tracks.envs.task_env import TrackedRobotEnv
+from scenes.clearance import point_box_distance
 from scenes.navigation import WALL_OBSTACLES
 from train.core.policy import act_from_params, load_policy_params
 from train.core.run_record import read_run_record
@@ -36,8 +37,8 @@ from provenance import provenance  # scripts/analysis/provenance.py (this script
 
 def wall_distance(xy: jax.Array, box_pos: jax.Array, box_size: jax.Array) -> jax.Array:
   """() m: the distance from a point to the nearest of the boxes' plane rectangles (0 inside one)."""
-  gap = jnp.maximum(jnp.abs(xy[None] - box_pos[:, :2]) - box_size[:, :2], 0.0)
-  return jnp.min(jnp.linalg.norm(gap, axis=1))
+  lo, hi = box_pos[:, :2] - box_size[:, :2], box_pos[:, :2] + box_size[:, :2]
+  return jnp.min(point_box_distance(xy[None], lo, hi))
 
 
 def posture_trace(core, act, keys, draw, layout, robot):
