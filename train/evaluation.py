@@ -159,6 +159,14 @@ def scene_programs(cfg0: TaskConfig, scenes: list[str]) -> list[tuple[TaskConfig
   return out
 
 
+def scene_env(cfg0: TaskConfig, scene: str):
+  """(env, draw): the task env of the one program that evaluates `scene` of task cfg0
+  (scene_programs) and the scene's draw, for replaying its trials (trial_starts with trial_keys)."""
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
+  ((cfg, draws),) = scene_programs(cfg0, [scene])
+  return TrackedRobotEnv(cfg), draws[scene]
+
+
 def trial_keys(trials: int, seed: int = EVAL_SEED):
   import jax  # noqa: PLC0415
   return jax.random.split(jax.random.PRNGKey(seed), trials)
@@ -202,12 +210,12 @@ def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps:
   policies: the runs of one `train.run --seeds` program probed at once)."""
   import jax  # noqa: PLC0415
   keys = trial_keys(trials, seed)
-  ((cfg, draws),) = scene_programs(cfg0, [scene])
-  _, rollout = trial_rollout(cfg, make_act, trials, eps)
+  core, draw = scene_env(cfg0, scene)
+  _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core)
   compiled = jax.jit(jax.vmap(lambda params, draw: rollout(params, keys, None, draw)[0], in_axes=(0, None)))
 
   def run(params) -> list[dict]:
-    acc = compiled(params, draws[scene])
+    acc = compiled(params, draw)
     runs = len(acc["length"])
     return [per_trial_figures({k: v[i] for k, v in acc.items()}) for i in range(runs)]
 

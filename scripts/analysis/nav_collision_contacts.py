@@ -32,12 +32,10 @@ import mujoco
 import numpy as np
 
 from mjx_tracks import atomic
-from mjx_tracks.envs.config import from_dict
-from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.sim import mjx_private
 from train.core.policy import act_from_params, load_policy_params
-from train.core.run_record import read_run_record
-from train.evaluation import EVAL_EPS, EVAL_SEED, report_path, scene_programs, trial_keys, trial_starts
+from train.core.run_record import run_config
+from train.evaluation import EVAL_EPS, EVAL_SEED, report_path, scene_env, trial_keys, trial_starts
 from provenance import provenance  # scripts/analysis/provenance.py (this script's folder is on sys.path)
 
 GONE = "not found in the substeps"
@@ -96,13 +94,12 @@ def contacts(run_dir: str, area: str) -> dict | None:
   if not os.path.exists(path):
     return None
   reported = np.asarray(json.load(open(path))["per_trial"]["collided"]) > 0
-  cfg = from_dict(read_run_record(run_dir)["config"])
+  cfg = run_config(run_dir)
   if cfg.randomization.enabled:
     raise SystemExit(f"error: {run_dir}: trained with randomization; the substeps are replayed without it")
-  (program, draws), = scene_programs(cfg, [area])
-  core = TrackedRobotEnv(program)
+  core, draw = scene_env(cfg, area)
   spec, params = load_policy_params(os.path.join(run_dir, "policy"))
-  run = jax.jit(lambda p, k: first_collision_pairs(core, act_from_params(spec), p, k, draws[area]))
+  run = jax.jit(lambda p, k: first_collision_pairs(core, act_from_params(spec), p, k, draw))
   pairs = np.asarray(run(params, trial_keys(len(reported), EVAL_SEED)))
   collided = pairs[:, 0] != -2
   names = collections.Counter(pair_name(core.sim.mj_model, p) for p in pairs[collided])

@@ -36,12 +36,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from mjx_tracks import atomic
-from mjx_tracks.envs.config import from_dict
-from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.sim.collisions import robot_at_rest
 from scenes.navigation import NAV_AREAS, WALL_OBSTACLES, area_corners
-from train.core.run_record import read_run_record
-from train.evaluation import EVAL_EPS, EVAL_SEED, report_path, scene_programs, trial_keys, trial_starts
+from train.core.run_record import run_config
+from train.evaluation import EVAL_EPS, EVAL_SEED, report_path, scene_env, trial_keys, trial_starts
 from provenance import provenance  # scripts/analysis/provenance.py (this script's folder is on sys.path)
 
 KINDS = ("floor obstacle", "wall obstacle", "outer wall")
@@ -70,9 +68,8 @@ def footprint_distance(p: np.ndarray, centre: np.ndarray, half: np.ndarray, yaw:
 def trial_scenes(cfg, area: str, trials: int, discs: tuple[float, ...]):
   """The trials' scene states (batched SceneState) of `area` as train.evaluate draws them, and
   (trials, discs) bool: whether each has a way round every obstacle for a disc of each radius."""
-  (program, draws), = scene_programs(cfg, [area])
-  core = TrackedRobotEnv(program)
-  starts = jax.jit(lambda keys: trial_starts(core, keys, EVAL_EPS, None, draws[area]))
+  core, draw = scene_env(cfg, area)
+  starts = jax.jit(lambda keys: trial_starts(core, keys, EVAL_EPS, None, draw))
   scene = starts(trial_keys(trials, EVAL_SEED)).pipeline_state.scene
   boxes = scene.box_pos.shape[1]
 
@@ -88,7 +85,7 @@ def sites(run_dir: str, area: str, check_radius: float, discs: tuple[float, ...]
     return None
   report = json.load(open(path))
   per = {k: np.asarray(v) for k, v in report["per_trial"].items()}
-  cfg = from_dict(read_run_record(run_dir)["config"])
+  cfg = run_config(run_dir)
   core, *arrays = trial_scenes(cfg, area, len(per["success"]), discs)
   scene, way = jax.tree_util.tree_map(np.asarray, arrays)
   end = np.stack([per["final_x"], per["final_y"]], axis=-1)

@@ -25,13 +25,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from mjx_tracks import atomic
-from mjx_tracks.envs.config import from_dict
-from mjx_tracks.envs.task_env import TrackedRobotEnv
 from scenes.clearance import point_box_distance
 from scenes.navigation import WALL_OBSTACLES
 from train.core.policy import act_from_params, load_policy_params
-from train.core.run_record import read_run_record
-from train.evaluation import EVAL_EPS, EVAL_SEED, scene_programs, trial_keys, trial_starts
+from train.core.run_record import run_config
+from train.evaluation import EVAL_EPS, EVAL_SEED, scene_env, trial_keys, trial_starts
 from provenance import provenance  # scripts/analysis/provenance.py (this script's folder is on sys.path)
 
 
@@ -62,12 +60,10 @@ def posture_trace(core, act, keys, draw, layout, robot):
 
 def posture(run_dir: str, area: str, trials: int, near: float) -> dict:
   """One run's flipper posture on one area's trials."""
-  cfg = from_dict(read_run_record(run_dir)["config"])
-  (program, draws), = scene_programs(cfg, [area])
-  core = TrackedRobotEnv(program)
+  cfg = run_config(run_dir)
+  core, draw = scene_env(cfg, area)
   spec, params = load_policy_params(os.path.join(run_dir, "policy"))
-  trace = jax.jit(lambda p, k: posture_trace(core, act_from_params(spec)(p), k, draws[area], core.sim.layout,
-                                             core.robot))
+  trace = jax.jit(lambda p, k: posture_trace(core, act_from_params(spec)(p), k, draw, core.sim.layout, core.robot))
   front, rear, dist, running = (np.asarray(a) for a in trace(params, trial_keys(trials, EVAL_SEED)))
   close = running & (dist < near)
   mean = lambda x, m: float(x[m].mean()) if m.any() else None  # noqa: E731
