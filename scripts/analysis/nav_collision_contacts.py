@@ -8,7 +8,7 @@ trial's first collision happens names the robot geom and the world geom
 as "not found in the substeps" (none is expected). The reports were written
 on a GPU and the replay runs here: the same trials, rounded differently, so a trial's course may
 part from its report's; each row says how many of the replay's collided trials collided in the
-report too (eval-nav-AREA.json).
+report too (eval-nav-AREA.json), and names each collided trial's first contact by the trial's index.
 Prints a line per run and area and writes JSON with the device, command and date. CPU: about 4
 minutes per run and area.
 
@@ -105,7 +105,8 @@ def contacts(run_dir: str, area: str) -> dict | None:
   names = collections.Counter(pair_name(core.sim.mj_model, p) for p in pairs[collided])
   return {"run": run_dir, "area": area, "trials": int(len(reported)), "collided": int(collided.sum()),
           "collided_in_report_too": int((collided & reported).sum()), "report_collided": int(reported.sum()),
-          "first_contacts": dict(names.most_common())}
+          "first_contacts": dict(names.most_common()),
+          "per_trial": {int(t): pair_name(core.sim.mj_model, pairs[t]) for t in np.flatnonzero(collided)}}
 
 
 def main(argv: list[str] | None = None) -> int:

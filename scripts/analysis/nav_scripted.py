@@ -4,7 +4,8 @@ that keeps the task's clearance, scenes.geodesic, as the reward measures it; wit
 --floor-clearance, around the floor obstacles too), turning on the spot when the path turns
 sharply, flippers held; on each scene of the tasks' evaluation suites, success
 and collisions by the tasks' own rules. Prints a table and writes JSON with the device, command and
-date.
+date; each row lists the trials that collided and those that timed out (neither reached nor
+collided), by index: trial t is the same layout as trial t of every evaluation of that scene.
 
 python scripts/analysis/nav_scripted.py --tasks nav-hard --out results/hard_tier/nav-scripted-cpu.json \
     [--scenes nav/hallway,nav/zigzag] [--trials 100] [--speed 0.5] [--floor-clearance 0.44] [--set KEY=VALUE ...]
@@ -74,7 +75,9 @@ def run(task: str, scene: str, speed: float, trials: int, overrides: list[str],
   mean = lambda k: round(float(np.mean(figs[k])), 3)  # noqa: E731
   return {"task": task, "overrides": overrides, "scene": scene, "speed_m_s": speed,
           "floor_clearance_m": floor_clearance, "trials": trials,
-          **{k: mean(k) for k in ("success", "progress", "collided", "tipped_over", "length")}}
+          **{k: mean(k) for k in ("success", "progress", "collided", "tipped_over", "length")},
+          "collided_trials": np.flatnonzero(np.asarray(figs["collided"]) > 0).tolist(),  # indices: compare policies trial by trial
+          "timed_out_trials": np.flatnonzero((np.asarray(figs["success"]) + np.asarray(figs["collided"])) == 0).tolist()}
 
 
 def main(argv: list[str] | None = None) -> int:

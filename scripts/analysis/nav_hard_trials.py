@@ -1,0 +1,175 @@
+"""What do the navigation trials that many policies collide in have in common? For one evaluation
+area (e.g. nav/zigzag) and the trained runs of a task in a study database: how many policies of the
+largest scene family (scripts/analysis/shared_failures.py: runs whose `scene` config is the same
+draw the same layout for the same trial) collided in each trial, and each trial's layout drawn
+again as `train.evaluate` drew it (the family's config, the area's draw, reset keys split from
+EVAL_SEED): the area's gap C, the two openings beside the wall obstacles' free ends (m), how far
+the nearest floor obstacle lies from a wall obstacle (m, footprint to footprint), the widest disc
+with a way round every obstacle from the spawn to the goal (m; bisection, not capped by C as the
+scene caps its passage), the spawn's heading and the goal's side. Prints the trials most policies
+collided in beside the means of the trials none collided in, and a Spearman rank correlation of
+each feature with the count; writes JSON (and with --plot a plan view of the worst trials) with the
+device, command and date. CPU, resets only (no policy is run).
+
+python scripts/analysis/nav_hard_trials.py results/studies/nav/study.sqlite --task nav-obstacles \
+    --area nav/zigzag --out results/nav/hard-trials-cpu.json --plot results/nav/hard-trials.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from mjx_tracks import atomic
+from mjx_tracks.envs.config import from_dict
+from scenes.navigation import AREA_W, WALL_OBSTACLES, path_around
+from shared_failures import outcomes  # scripts/analysis/shared_failures.py (this script's folder is on sys.path)
+from provenance import provenance  # scripts/analysis/provenance.py
+from train.db import read_only
+from train.evaluation import EVAL_EPS, EVAL_SEED, scene_env, trial_keys, trial_starts
+
+DISC_RANGE = (0.05, 2.0)  # m, the widest disc's bisection interval
+BISECTIONS = 12  # its resolution: 2 m / 2^12 ~ 0.5 mm
+
+
+def family_config(db: str, run_key: str):
+  """The task config of one run of the family ("db:run_id", as shared_failures.outcomes keys it)."""
+  run_id = run_key[len(db) + 1:]
+  with read_only(db) as c:
+    (config_json,) = c.execute("SELECT config_json FROM experiments WHERE run_id = ?", (run_id,)).fetchone()
+  return from_dict(json.loads(config_json))
+
+
+def in_area(xy, length: float):
+  """Whether each box centre (.., 2) m lies in the area (a box left out of a scene is parked off it)."""
+  return (xy[..., 0] >= 0) & (xy[..., 0] <= length) & (jnp.abs(xy[..., 1]) <= AREA_W / 2)
+
+
+def rect_gap(pos_a, half_a, pos_b, half_b):
+  """Distance (m) between two axis-aligned rectangles (centres, half-sizes (2,)); 0 if they overlap."""
+  d = jnp.maximum(jnp.abs(pos_a - pos_b) - half_a - half_b, 0.0)
+  return jnp.linalg.norm(d)
+
+
+def widest_disc(s, length: float):
+  """The largest disc radius (m) with a way from the spawn to the goal round every box of scene s."""
+  def ok(r):
+    return jnp.isfinite(path_around(s.spawn_pos[:2], s.goal[:2], s.box_pos[:, :2], s.box_size[:, :2], r, length))
+
+  def halve(_, lo_hi):
+    lo, hi = lo_hi
+    mid = (lo + hi) / 2
+    return jnp.where(ok(mid), mid, lo), jnp.where(ok(mid), hi, mid)
+  lo, _ = jax.lax.fori_loop(0, BISECTIONS, halve, (jnp.float32(DISC_RANGE[0]), jnp.float32(DISC_RANGE[1])))
+  return jnp.where(ok(DISC_RANGE[0]), lo, 0.0)
+
+
+def layout_features(s, length: float) -> dict:
+  """One trial's layout figures (m, rad), the module docstring's."""
+  walls_pos, walls_half = s.box_pos[:WALL_OBSTACLES, :2], s.box_size[:WALL_OBSTACLES, :2]
+  floor_pos, floor_half = s.box_pos[WALL_OBSTACLES:, :2], s.box_size[WALL_OBSTACLES:, :2]
+  kept = in_area(floor_pos, length)
+  gaps = jax.vmap(lambda p, h: jax.vmap(lambda q, g: rect_gap(p, h, q, g))(walls_pos, walls_half))(floor_pos, floor_half)
+  return {"gap_C": s.xi[4], "opening_1": AREA_W - s.xi[0], "opening_2": AREA_W - s.xi[2],
+          "floor_to_wall_obstacle": jnp.min(jnp.where(kept[:, None], gaps, jnp.inf)),
+          "floor_obstacles_kept": jnp.sum(kept).astype(jnp.float32), "widest_disc": widest_disc(s, length),
+          "spawn_yaw_abs": jnp.abs(s.spawn_yaw), "spawn_y": s.spawn_pos[1], "goal_y": s.goal[1]}
+
+
+def trial_layouts(cfg, area: str, trials: int):
+  """The trials' scene states as train.evaluate draws them, and their layout figures."""
+  core, draw = scene_env(cfg, area)
+  scene = jax.jit(lambda keys: trial_starts(core, keys, EVAL_EPS, None, draw))(trial_keys(trials, EVAL_SEED)).pipeline_state.scene
+  feats = jax.jit(jax.vmap(lambda s: layout_features(s, core.scene.length)))(scene)
+  return jax.tree_util.tree_map(np.asarray, scene), {k: np.asarray(v, float) for k, v in feats.items()}
+
+
+def spearman(x: np.ndarray, y: np.ndarray) -> float:
+  """Spearman's rank correlation (average ranks for ties)."""
+  def rank(v):
+    order = np.argsort(v, kind="stable")
+    r = np.empty(len(v))
+    r[order] = np.arange(len(v))
+    for u in np.unique(v):  # ties share their mean rank
+      r[v == u] = r[v == u].mean()
+    return r
+  rx, ry = rank(x), rank(y)
+  return float(np.corrcoef(rx, ry)[0, 1]) if rx.std() and ry.std() else float("nan")
+
+
+def summarize(counts: np.ndarray, feats: dict, worst: int) -> dict:
+  """The worst trials' figures, the means over the trials no policy collided in, each feature's
+  rank correlation with the count."""
+  order = np.argsort(-counts, kind="stable")[:worst]
+  clean = counts == 0
+  return {"worst_trials": [{"trial": int(t), "policies": int(counts[t]), **{k: round(float(v[t]), 3) for k, v in feats.items()}}
+                           for t in order],
+          "mean_of_trials_none_collided_in": {k: round(float(v[clean].mean()), 3) for k, v in feats.items()},
+          "trials_none_collided_in": int(clean.sum()),
+          "spearman_with_count": {k: round(spearman(v, counts), 3) for k, v in feats.items()}}
+
+
+def plot(path: str, scene, counts: np.ndarray, trials: list[int], policies: int, area_len: float) -> None:
+  """Plan views of the given trials: wall obstacles (dark), floor obstacles (light), spawn and heading, goal."""
+  import matplotlib  # noqa: PLC0415
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt  # noqa: PLC0415
+  cols = 4
+  fig, axes = plt.subplots((len(trials) + cols - 1) // cols, cols, figsize=(4 * cols, 3.6 * ((len(trials) + cols - 1) // cols)))
+  for ax, t in zip(np.ravel(axes), trials):
+    for i, (p, h) in enumerate(zip(scene.box_pos[t, :, :2], scene.box_size[t, :, :2])):
+      if in_area(p, area_len):
+        ax.add_patch(plt.Rectangle(p - h, *(2 * h), color="0.2" if i < WALL_OBSTACLES else "tab:orange", alpha=0.9))
+    sp, yaw = scene.spawn_pos[t], scene.spawn_yaw[t]
+    ax.plot(*sp[:2], "bo")
+    ax.arrow(sp[0], sp[1], 0.8 * np.cos(yaw), 0.8 * np.sin(yaw), color="b", width=0.05)
+    ax.plot(*scene.goal[t, :2], "g*", markersize=12)
+    ax.set_xlim(0, area_len)
+    ax.set_ylim(-AREA_W / 2, AREA_W / 2)
+    ax.set_aspect("equal")
+    ax.set_title(f"trial {t}: {int(counts[t])} of {policies} collided", fontsize=9)
+  for ax in np.ravel(axes)[len(trials):]:
+    ax.axis("off")
+  fig.tight_layout()
+  fig.savefig(path, dpi=80)
+
+
+def main(argv: list[str] | None = None) -> int:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("db", help="a study database (STUDY/study.sqlite)")
+  p.add_argument("--task", default="nav-obstacles", help="the task, its variants (TASK-...) included")
+  p.add_argument("--area", default="nav/zigzag", help="the evaluation scene (nav/hallway, nav/zigzag, held-out/...)")
+  p.add_argument("--worst", type=int, default=8, help="how many of the most-collided trials to list (and plot)")
+  p.add_argument("--out", help="JSON path")
+  p.add_argument("--plot", help="PNG path: plan views of the worst trials and, for comparison, the first clean ones")
+  args = p.parse_args(argv)
+  tables = outcomes([args.db], args.area, args.task, "collided")
+  if not tables:
+    print(f"error: no run of {args.task} evaluated on {args.area} in {args.db}", file=sys.stderr)
+    return 2
+  table = max(tables.values(), key=len)  # the largest family
+  trials = sorted(set.intersection(*(set(t) for t in table.values())))
+  counts = np.array([sum(table[r][t] for r in table) for t in trials])
+  cfg = family_config(args.db, next(iter(table)))
+  scene, feats = trial_layouts(cfg, args.area, len(trials))
+  result = {**provenance(), "area": args.area, "task": args.task, "policies": len(table),
+            "collisions": int(counts.sum()), **summarize(counts, feats, args.worst)}
+  for row in result["worst_trials"]:
+    print(json.dumps(row))
+  print("none collided in", result["trials_none_collided_in"], "trials; their means:", json.dumps(result["mean_of_trials_none_collided_in"]))
+  print("spearman with the count:", json.dumps(result["spearman_with_count"]))
+  if args.out:
+    atomic.write_json(args.out, result)
+  if args.plot:
+    shown = [r["trial"] for r in result["worst_trials"]] + [t for t in trials if counts[t] == 0][:4]
+    plot(args.plot, scene, counts, shown, len(table), cfg.scene.nav_length)
+  return 0
+
+
+if __name__ == "__main__":
+  sys.exit(main())
