@@ -13,7 +13,7 @@ outcome is the rollout's chance.
 python scripts/analysis/shared_failures.py results/studies/robust*/study.sqlite \
     --scene hardest+friction-low --task asc-inc-cog --out results/sim-to-real/shared-failures.json
 python scripts/analysis/shared_failures.py results/studies/nav/study.sqlite --scene nav/zigzag \
-    --task nav-obstacles --outcome collided --out results/nav/shared-collisions.json
+    --task nav-obstacles --outcome collided --out results/nav/shared-collisions-zigzag.json
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import sys
 
 import numpy as np
 
+from mjx_tracks import atomic
 from train.db import read_only
 from provenance import provenance  # scripts/analysis/provenance.py (this script's folder is on sys.path)
 
@@ -88,10 +89,9 @@ def main(argv=None) -> int:
                     key=lambda r: -r["policies"])
   result = {**provenance(), "scene": args.scene, "task": args.task, "outcome": args.outcome, "families": families}
   for r in families:
-    print(json.dumps({k: v for k, v in r.items() if k not in ("rate_per_policy", "scene_config")}, indent=1))
+    print(json.dumps({k: v for k, v in r.items() if k not in ("rate_per_policy", "scene_config")}))
   if args.out:
-    with open(args.out, "w") as f:
-      json.dump(result, f, indent=1)
+    atomic.write_json(args.out, result)
   return 0
 
 
