@@ -1,7 +1,9 @@
 """scripts/analysis/nav_hard_trials.py: each layout figure against a hand-built scene, the rank
-correlation against hand-ranked cases."""
+correlation against hand-ranked cases, the family of the task asked for."""
 
+import json
 import os
+import sqlite3
 import sys
 
 import jax.numpy as jnp
@@ -9,8 +11,10 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "analysis"))
-from nav_hard_trials import BISECTIONS, DISC_RANGE, layout_features, spearman, summarize  # noqa: E402
+from nav_hard_trials import BISECTIONS, DISC_RANGE, layout_features, spearman, summarize, task_family  # noqa: E402
+from shared_failures import outcomes  # noqa: E402
 
+from mjx_tracks.envs.config import load_config  # noqa: E402
 from scenes.geodesic import NODE_OFFSET  # noqa: E402
 from scenes.navigation import AREA_LEN  # noqa: E402
 from scenes.scene import SceneState  # noqa: E402
@@ -62,3 +66,18 @@ def test_the_summary_lists_the_most_collided_trials_first_and_averages_the_clean
   s = summarize(counts, feats, worst=2)
   assert [(r["trial"], r["policies"]) for r in s["worst_trials"]] == [(4, 9), (1, 5)]
   assert s["trials_none_collided_in"] == 2 and s["mean_of_trials_none_collided_in"]["gap_C"] == pytest.approx(2.0)
+
+
+def test_the_family_read_is_the_tasks_own_not_a_larger_one_of_a_task_named_like_a_variant(tmp_path):
+  db = str(tmp_path / "study.sqlite")
+  nav, obstacles = (json.dumps(load_config(t).to_dict()) for t in ("nav", "nav-obstacles"))
+  runs = [("a", "nav", nav), ("b", "nav-obstacles", obstacles), ("c", "nav-obstacles", obstacles)]
+  with sqlite3.connect(db) as c:
+    c.execute("CREATE TABLE experiments (run_id TEXT, task TEXT, algo TEXT, config_json TEXT)")
+    c.execute("CREATE TABLE evals (run_id TEXT, scene TEXT, trial INTEGER, success REAL, collided REAL)")
+    c.executemany("INSERT INTO experiments VALUES (?, ?, 'ppo', ?)", runs)
+    c.executemany("INSERT INTO evals VALUES (?, 'nav/zigzag', 0, 1.0, 0.0)", [(r[0],) for r in runs])
+  tables = outcomes([db], "nav/zigzag", "nav", "collided")  # "nav" keeps nav-... as variants
+  assert sorted(len(t) for t in tables.values()) == [1, 2]
+  assert list(task_family(db, tables, "nav")) == [f"{db}:a"]
+  assert sorted(task_family(db, tables, "nav-obstacles")) == [f"{db}:b", f"{db}:c"]

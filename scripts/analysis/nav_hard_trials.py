@@ -1,18 +1,18 @@
-"""What do the navigation trials that many policies collide in have in common? For one evaluation
-area (e.g. nav/zigzag) and the trained runs of a task in a study database: how many policies of the
-largest scene family (scripts/analysis/shared_failures.py: runs whose `scene` config is the same
-draw the same layout for the same trial) collided in each trial, and each trial's layout drawn
-again as `train.evaluate` drew it (the family's config, the area's draw, reset keys split from
-EVAL_SEED): the area's gap C, the two openings beside the wall obstacles' free ends (m), how far
-the nearest floor obstacle lies from a wall obstacle (m, footprint to footprint), the widest disc
-with a way round every obstacle from the spawn to the goal (m; bisection, not capped by C as the
-scene caps its passage), the spawn's heading and the goal's side. Prints the trials most policies
-collided in beside the means of the trials none collided in, and a Spearman rank correlation of
-each feature with the count; writes JSON (and with --plot a plan view of the worst trials) with the
-device, command and date. CPU, resets only (no policy is run).
+"""What do the navigation trials that many policies collide in have in common? For one evaluation area
+(e.g. nav/zigzag) and the trained runs of a task in a study database: how many policies of the
+largest scene family with a run of that task (scripts/analysis/shared_failures.py: runs whose
+`scene` config is the same draw the same layout for the same trial) collided in each trial, and each
+trial's layout drawn again as `train.evaluate` drew it (the family's config, the area's draw, reset
+keys split from EVAL_SEED): the area's gap C, the two openings beside the wall obstacles' free ends
+(m), how far the nearest floor obstacle lies from a wall obstacle (m, footprint to footprint), the
+widest disc with a way round every obstacle from the spawn to the goal (m; bisection, not capped by
+C as the scene caps its passage), the spawn's heading and the goal's side. Prints the trials most
+policies collided in beside the means of the trials none collided in, and a Spearman rank
+correlation of each feature with the count; writes JSON (and with --plot a plan view of the worst
+trials) with the device, command and date. CPU, resets only (no policy is run).
 
 python scripts/analysis/nav_hard_trials.py results/studies/nav/study.sqlite --task nav-obstacles \
-    --area nav/zigzag --out results/nav/hard-trials-cpu.json --plot results/nav/hard-trials.png
+    --area nav/zigzag --out results/nav/hard-trials-zigzag-cpu.json --plot results/nav/hard-trials-zigzag.png
 """
 
 from __future__ import annotations
@@ -37,12 +37,19 @@ DISC_RANGE = (0.05, 2.0)  # m, the widest disc's bisection interval
 BISECTIONS = 12  # its resolution: 2 m / 2^12 ~ 0.5 mm
 
 
-def family_config(db: str, run_key: str):
-  """The task config of one run of the family ("db:run_id", as shared_failures.outcomes keys it)."""
+def run_task_config(db: str, run_key: str):
+  """(task name, task config) of one run ("db:run_id", as shared_failures.outcomes keys it)."""
   run_id = run_key[len(db) + 1:]
   with read_only(db) as c:
-    (config_json,) = c.execute("SELECT config_json FROM experiments WHERE run_id = ?", (run_id,)).fetchone()
-  return from_dict(json.loads(config_json))
+    task, config_json = c.execute("SELECT task, config_json FROM experiments WHERE run_id = ?", (run_id,)).fetchone()
+  return task, from_dict(json.loads(config_json))
+
+
+def task_family(db: str, tables: dict, task: str) -> dict:
+  """The largest family (shared_failures.outcomes) with a run of exactly `task` (outcomes also keeps
+  its variants, TASK-..., which for nav include other tasks: nav-obstacles); else the largest."""
+  own = [t for t in tables.values() if any(run_task_config(db, r)[0] == task for r in t)]
+  return max(own or tables.values(), key=len)
 
 
 def in_area(xy, length: float):
@@ -76,7 +83,7 @@ def layout_features(s, length: float) -> dict:
   kept = in_area(floor_pos, length)
   gaps = jax.vmap(lambda p, h: jax.vmap(lambda q, g: rect_gap(p, h, q, g))(walls_pos, walls_half))(floor_pos, floor_half)
   return {"gap_C": s.xi[4], "opening_1": AREA_W - s.xi[0], "opening_2": AREA_W - s.xi[2],
-          "floor_to_wall_obstacle": jnp.min(jnp.where(kept[:, None], gaps, jnp.inf)),
+          "floor_to_wall_obstacle": jnp.min(jnp.where(kept[:, None], gaps, jnp.inf), initial=jnp.inf),
           "floor_obstacles_kept": jnp.sum(kept).astype(jnp.float32), "widest_disc": widest_disc(s, length),
           "spawn_yaw_abs": jnp.abs(s.spawn_yaw), "spawn_y": s.spawn_pos[1], "goal_y": s.goal[1]}
 
@@ -152,10 +159,10 @@ def main(argv: list[str] | None = None) -> int:
   if not tables:
     print(f"error: no run of {args.task} evaluated on {args.area} in {args.db}", file=sys.stderr)
     return 2
-  table = max(tables.values(), key=len)  # the largest family
+  table = task_family(args.db, tables, args.task)
   trials = sorted(set.intersection(*(set(t) for t in table.values())))
   counts = np.array([sum(table[r][t] for r in table) for t in trials])
-  cfg = family_config(args.db, next(iter(table)))
+  _, cfg = run_task_config(args.db, next(iter(table)))
   scene, feats = trial_layouts(cfg, args.area, len(trials))
   result = {**provenance(), "area": args.area, "task": args.task, "policies": len(table),
             "collisions": int(counts.sum()), **summarize(counts, feats, args.worst)}
