@@ -59,3 +59,9 @@ def test_the_database_reader_keeps_the_task_and_its_variants_and_leaves_baseline
   assert {r: t[0] for table in collided.values() for r, t in table.items()} == {f"{db}:{r}": 0.0 for r in "abef"}
   with pytest.raises(ValueError, match="outcome"):
     outcomes([db], "hardest+friction-low", "asc-inc-cog", "success; DROP TABLE evals")
+
+
+def test_only_the_trials_every_policy_ran_are_compared_and_the_others_counted():
+  s = summary({"a": {0: 1.0, 1: 0.0, 2: 1.0, 3: 1.0}, "b": {0: 1.0, 1: 1.0, 2: 0.0}})
+  assert s["trials"] == 3 and s["trials_not_every_policy_ran"] == 1
+  assert s["policies_per_trial_histogram"] == [0, 2, 1]  # trial 0 both, trials 1 and 2 one each

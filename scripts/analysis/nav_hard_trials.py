@@ -4,12 +4,14 @@ largest scene family with a run of that task (scripts/analysis/shared_failures.p
 `scene` config is the same draw the same layout for the same trial) collided in each trial, and each
 trial's layout drawn again as `train.evaluate` drew it (the family's config, the area's draw, reset
 keys split from EVAL_SEED): the area's gap C, the two openings beside the wall obstacles' free ends
-(m), how far the nearest floor obstacle lies from a wall obstacle (m, footprint to footprint), the
-widest disc with a way round every obstacle from the spawn to the goal (m; bisection, not capped by
-C as the scene caps its passage), the spawn's heading and the goal's side. Prints the trials most
-policies collided in beside the means of the trials none collided in, and a Spearman rank
-correlation of each feature with the count; writes JSON (and with --plot a plan view of the worst
-trials) with the device, command and date. CPU, resets only (no policy is run).
+(m; in a hallway: the area's width less each obstacle's jut), how far the nearest floor obstacle
+lies from a wall obstacle (m, footprint to footprint), the widest disc with a way round every
+obstacle from the spawn to the goal (m; bisection, not capped by C as the scene caps its passage),
+the spawn's heading and the goal's side. Prints the trials most policies collided in beside the
+means of the trials none collided in, and a Spearman rank correlation of each feature with the count
+(none for a feature that never varies); writes JSON with every trial's count and figures (and with
+--plot a plan view of the worst trials) with the device, command and date. CPU, resets only (no
+policy is run).
 
 python scripts/analysis/nav_hard_trials.py results/studies/nav/study.sqlite --task nav-obstacles \
     --area nav/zigzag --out results/nav/hard-trials-zigzag-cpu.json --plot results/nav/hard-trials-zigzag.png
@@ -71,7 +73,8 @@ def widest_disc(s, length: float):
   def halve(_, lo_hi):
     lo, hi = lo_hi
     mid = (lo + hi) / 2
-    return jnp.where(ok(mid), mid, lo), jnp.where(ok(mid), hi, mid)
+    passes = ok(mid)
+    return jnp.where(passes, mid, lo), jnp.where(passes, hi, mid)
   lo, _ = jax.lax.fori_loop(0, BISECTIONS, halve, (jnp.float32(DISC_RANGE[0]), jnp.float32(DISC_RANGE[1])))
   return jnp.where(ok(DISC_RANGE[0]), lo, 0.0)
 
@@ -89,11 +92,12 @@ def layout_features(s, length: float) -> dict:
 
 
 def trial_layouts(cfg, area: str, trials: int):
-  """The trials' scene states as train.evaluate draws them, and their layout figures."""
+  """Trials 0 .. trials - 1's scene states as train.evaluate draws them, their layout figures and
+  the area's length (m)."""
   core, draw = scene_env(cfg, area)
   scene = jax.jit(lambda keys: trial_starts(core, keys, EVAL_EPS, None, draw))(trial_keys(trials, EVAL_SEED)).pipeline_state.scene
   feats = jax.jit(jax.vmap(lambda s: layout_features(s, core.scene.length)))(scene)
-  return jax.tree_util.tree_map(np.asarray, scene), {k: np.asarray(v, float) for k, v in feats.items()}
+  return jax.tree_util.tree_map(np.asarray, scene), {k: np.asarray(v, float) for k, v in feats.items()}, core.scene.length
 
 
 def spearman(x: np.ndarray, y: np.ndarray) -> float:
@@ -106,7 +110,7 @@ def spearman(x: np.ndarray, y: np.ndarray) -> float:
       r[v == u] = r[v == u].mean()
     return r
   rx, ry = rank(x), rank(y)
-  return float(np.corrcoef(rx, ry)[0, 1]) if rx.std() and ry.std() else float("nan")
+  return float(np.corrcoef(rx, ry)[0, 1]) if rx.std() and ry.std() else None  # None: a constant (no ranks)
 
 
 def summarize(counts: np.ndarray, feats: dict, worst: int) -> dict:
@@ -118,7 +122,9 @@ def summarize(counts: np.ndarray, feats: dict, worst: int) -> dict:
                            for t in order],
           "mean_of_trials_none_collided_in": {k: round(float(v[clean].mean()), 3) for k, v in feats.items()},
           "trials_none_collided_in": int(clean.sum()),
-          "spearman_with_count": {k: round(spearman(v, counts), 3) for k, v in feats.items()}}
+          "spearman_with_count": {k: None if (r := spearman(v, counts)) is None else round(r, 3) for k, v in feats.items()},
+          "per_trial": {"collided_policies": counts.tolist(),
+                        **{k: [round(float(x), 4) for x in v] for k, v in feats.items()}}}  # 4: the bisection resolves 0.5 mm
 
 
 def plot(path: str, scene, counts: np.ndarray, trials: list[int], policies: int, area_len: float) -> None:
@@ -126,8 +132,8 @@ def plot(path: str, scene, counts: np.ndarray, trials: list[int], policies: int,
   import matplotlib  # noqa: PLC0415
   matplotlib.use("Agg")
   import matplotlib.pyplot as plt  # noqa: PLC0415
-  cols = 4
-  fig, axes = plt.subplots((len(trials) + cols - 1) // cols, cols, figsize=(4 * cols, 3.6 * ((len(trials) + cols - 1) // cols)))
+  cols, rows = 4, max(1, (len(trials) + 3) // 4)
+  fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.6 * rows))
   for ax, t in zip(np.ravel(axes), trials):
     for i, (p, h) in enumerate(zip(scene.box_pos[t, :, :2], scene.box_size[t, :, :2])):
       if in_area(p, area_len):
@@ -161,9 +167,13 @@ def main(argv: list[str] | None = None) -> int:
     return 2
   table = task_family(args.db, tables, args.task)
   trials = sorted(set.intersection(*(set(t) for t in table.values())))
+  if trials != list(range(len(trials))):  # the layouts are drawn as trials 0 .. n - 1
+    print(f"error: the family's runs share trials {trials[:5]}... of {args.area}, not 0 .. n - 1 of one "
+          "evaluation", file=sys.stderr)
+    return 2
   counts = np.array([sum(table[r][t] for r in table) for t in trials])
   _, cfg = run_task_config(args.db, next(iter(table)))
-  scene, feats = trial_layouts(cfg, args.area, len(trials))
+  scene, feats, area_len = trial_layouts(cfg, args.area, len(trials))
   result = {**provenance(), "area": args.area, "task": args.task, "policies": len(table),
             "collisions": int(counts.sum()), **summarize(counts, feats, args.worst)}
   for row in result["worst_trials"]:
@@ -174,7 +184,7 @@ def main(argv: list[str] | None = None) -> int:
     atomic.write_json(args.out, result)
   if args.plot:
     shown = [r["trial"] for r in result["worst_trials"]] + [t for t in trials if counts[t] == 0][:4]
-    plot(args.plot, scene, counts, shown, len(table), cfg.scene.nav_length)
+    plot(args.plot, scene, counts, shown, len(table), area_len)
   return 0
 
 

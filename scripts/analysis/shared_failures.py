@@ -59,12 +59,15 @@ def outcomes(dbs: list[str], scene: str, task: str, outcome: str = "success") ->
 
 
 def summary(table: dict[str, dict[int, float]]) -> dict:
-  """Per-trial counts of the policies with the outcome against the trial-independent expectation."""
+  """Per-trial counts of the policies with the outcome against the trial-independent expectation,
+  over the trials every policy ran (how many others there were is counted)."""
   runs = sorted(table)
   trials = sorted(set.intersection(*(set(t) for t in table.values())))
   m = np.array([[table[r][t] for t in trials] for r in runs])  # (policies, trials) 0 / 1
   p, counts = m.mean(axis=1), m.sum(axis=0)
-  return {"policies": len(runs), "trials": len(trials), "rate_per_policy": dict(zip(runs, p.round(3).tolist())),
+  every = set.union(*(set(t) for t in table.values()))
+  return {"policies": len(runs), "trials": len(trials), "trials_not_every_policy_ran": len(every) - len(trials),
+          "rate_per_policy": dict(zip(runs, p.round(3).tolist())),
           "mean_rate": float(p.mean()),
           "trials_of_no_policy": int((counts == 0).sum()),
           "trials_of_every_policy": int((counts == len(runs)).sum()),
