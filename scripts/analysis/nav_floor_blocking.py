@@ -28,7 +28,7 @@ from mjx_tracks import atomic
 from mjx_tracks.envs.config import load_config
 from scenes.kinds import scene_kind
 from scenes.navigation import WALL_OBSTACLES, path_around
-from scenes.world import parked_xyz
+from scenes.world import is_parked
 
 
 def free_space(states, boxes: int, r: float) -> np.ndarray:
@@ -49,8 +49,8 @@ def blocked_shares(task: str, scenes: int, radii: list[float], overrides=(), see
   states = jax.jit(jax.vmap(lambda k: scene.sample(k, jnp.float32(1.0))))(jax.random.split(jax.random.PRNGKey(seed), scenes))
   area = np.asarray(states.variant)  # 0 hallway, 1 zigzag
   # with scene.nav_floor_passage, a scene whose FLOOR_TRIES layouts all lacked a way round has its
-  # floor obstacles parked off the area (scenes.world.parked_xyz)
-  left_out = np.asarray(states.box_pos[:, WALL_OBSTACLES, 2]) == parked_xyz(WALL_OBSTACLES)[2]
+  # floor obstacles parked off the area
+  left_out = np.asarray(is_parked(states.box_pos[:, WALL_OBSTACLES]))
   rows = []
   for r in radii:
     walls = free_space(states, WALL_OBSTACLES, r)

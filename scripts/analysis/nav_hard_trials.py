@@ -30,7 +30,8 @@ import numpy as np
 from mjx_tracks import atomic
 from mjx_tracks.envs.config import from_dict
 from scenes.navigation import AREA_W, WALL_OBSTACLES, path_around
-from shared_failures import outcomes  # scripts/analysis/shared_failures.py (this script's folder is on sys.path)
+from scenes.world import is_parked
+from shared_failures import outcomes, shared_trials  # scripts/analysis/shared_failures.py (this script's folder is on sys.path)
 from provenance import provenance  # scripts/analysis/provenance.py
 from train.db import read_only
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_env, trial_keys, trial_starts
@@ -39,24 +40,21 @@ DISC_RANGE = (0.05, 2.0)  # m, the widest disc's bisection interval
 BISECTIONS = 12  # its resolution: 2 m / 2^12 ~ 0.5 mm
 
 
-def run_task_config(db: str, run_key: str):
-  """(task name, task config) of one run ("db:run_id", as shared_failures.outcomes keys it)."""
-  run_id = run_key[len(db) + 1:]
+def run_config_in(db: str, run_key: str):
+  """The task config of one run ("db:run_id", as shared_failures.outcomes keys it)."""
   with read_only(db) as c:
-    task, config_json = c.execute("SELECT task, config_json FROM experiments WHERE run_id = ?", (run_id,)).fetchone()
-  return task, from_dict(json.loads(config_json))
+    (config_json,) = c.execute("SELECT config_json FROM experiments WHERE run_id = ?",
+                               (run_key[len(db) + 1:],)).fetchone()
+  return from_dict(json.loads(config_json))
 
 
 def task_family(db: str, tables: dict, task: str) -> dict:
   """The largest family (shared_failures.outcomes) with a run of exactly `task` (outcomes also keeps
   its variants, TASK-..., which for nav include other tasks: nav-obstacles); else the largest."""
-  own = [t for t in tables.values() if any(run_task_config(db, r)[0] == task for r in t)]
+  with read_only(db) as c:
+    own_runs = {f"{db}:{r}" for (r,) in c.execute("SELECT run_id FROM experiments WHERE task = ?", (task,))}
+  own = [t for t in tables.values() if own_runs & set(t)]
   return max(own or tables.values(), key=len)
-
-
-def in_area(xy, length: float):
-  """Whether each box centre (.., 2) m lies in the area (a box left out of a scene is parked off it)."""
-  return (xy[..., 0] >= 0) & (xy[..., 0] <= length) & (jnp.abs(xy[..., 1]) <= AREA_W / 2)
 
 
 def rect_gap(pos_a, half_a, pos_b, half_b):
@@ -83,7 +81,7 @@ def layout_features(s, length: float) -> dict:
   """One trial's layout figures (m, rad), the module docstring's."""
   walls_pos, walls_half = s.box_pos[:WALL_OBSTACLES, :2], s.box_size[:WALL_OBSTACLES, :2]
   floor_pos, floor_half = s.box_pos[WALL_OBSTACLES:, :2], s.box_size[WALL_OBSTACLES:, :2]
-  kept = in_area(floor_pos, length)
+  kept = ~is_parked(s.box_pos[WALL_OBSTACLES:])
   gaps = jax.vmap(lambda p, h: jax.vmap(lambda q, g: rect_gap(p, h, q, g))(walls_pos, walls_half))(floor_pos, floor_half)
   return {"gap_C": s.xi[4], "opening_1": AREA_W - s.xi[0], "opening_2": AREA_W - s.xi[2],
           "floor_to_wall_obstacle": jnp.min(jnp.where(kept[:, None], gaps, jnp.inf), initial=jnp.inf),
@@ -100,17 +98,10 @@ def trial_layouts(cfg, area: str, trials: int):
   return jax.tree_util.tree_map(np.asarray, scene), {k: np.asarray(v, float) for k, v in feats.items()}, core.scene.length
 
 
-def spearman(x: np.ndarray, y: np.ndarray) -> float:
-  """Spearman's rank correlation (average ranks for ties)."""
-  def rank(v):
-    order = np.argsort(v, kind="stable")
-    r = np.empty(len(v))
-    r[order] = np.arange(len(v))
-    for u in np.unique(v):  # ties share their mean rank
-      r[v == u] = r[v == u].mean()
-    return r
-  rx, ry = rank(x), rank(y)
-  return float(np.corrcoef(rx, ry)[0, 1]) if rx.std() and ry.std() else None  # None: a constant (no ranks)
+def spearman(x: np.ndarray, y: np.ndarray) -> float | None:
+  """Spearman's rank correlation (scipy's: average ranks for ties); None where x or y never varies."""
+  from scipy.stats import spearmanr  # noqa: PLC0415  (scipy: a dependency of jax)
+  return float(spearmanr(x, y).statistic) if np.ptp(x) and np.ptp(y) else None
 
 
 def summarize(counts: np.ndarray, feats: dict, worst: int) -> dict:
@@ -136,7 +127,7 @@ def plot(path: str, scene, counts: np.ndarray, trials: list[int], policies: int,
   fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.6 * rows))
   for ax, t in zip(np.ravel(axes), trials):
     for i, (p, h) in enumerate(zip(scene.box_pos[t, :, :2], scene.box_size[t, :, :2])):
-      if in_area(p, area_len):
+      if not is_parked(scene.box_pos[t, i]):
         ax.add_patch(plt.Rectangle(p - h, *(2 * h), color="0.2" if i < WALL_OBSTACLES else "tab:orange", alpha=0.9))
     sp, yaw = scene.spawn_pos[t], scene.spawn_yaw[t]
     ax.plot(*sp[:2], "bo")
@@ -166,13 +157,13 @@ def main(argv: list[str] | None = None) -> int:
     print(f"error: no run of {args.task} evaluated on {args.area} in {args.db}", file=sys.stderr)
     return 2
   table = task_family(args.db, tables, args.task)
-  trials = sorted(set.intersection(*(set(t) for t in table.values())))
+  trials = shared_trials(table)
   if trials != list(range(len(trials))):  # the layouts are drawn as trials 0 .. n - 1
     print(f"error: the family's runs share trials {trials[:5]}... of {args.area}, not 0 .. n - 1 of one "
           "evaluation", file=sys.stderr)
     return 2
   counts = np.array([sum(table[r][t] for r in table) for t in trials])
-  _, cfg = run_task_config(args.db, next(iter(table)))
+  cfg = run_config_in(args.db, next(iter(table)))
   scene, feats, area_len = trial_layouts(cfg, args.area, len(trials))
   result = {**provenance(), "area": args.area, "task": args.task, "policies": len(table),
             "collisions": int(counts.sum()), **summarize(counts, feats, args.worst)}

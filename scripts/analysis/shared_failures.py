@@ -58,11 +58,15 @@ def outcomes(dbs: list[str], scene: str, task: str, outcome: str = "success") ->
   return out
 
 
+def shared_trials(table: dict[str, dict[int, float]]) -> list[int]:
+  """The trials every run of the table ran, in order."""
+  return sorted(set.intersection(*(set(t) for t in table.values())))
+
+
 def summary(table: dict[str, dict[int, float]]) -> dict:
   """Per-trial counts of the policies with the outcome against the trial-independent expectation,
   over the trials every policy ran (how many others there were is counted)."""
-  runs = sorted(table)
-  trials = sorted(set.intersection(*(set(t) for t in table.values())))
+  runs, trials = sorted(table), shared_trials(table)
   m = np.array([[table[r][t] for t in trials] for r in runs])  # (policies, trials) 0 / 1
   p, counts = m.mean(axis=1), m.sum(axis=0)
   every = set.union(*(set(t) for t in table.values()))
