@@ -59,6 +59,9 @@ def test_the_database_reader_keeps_the_task_and_its_variants_and_leaves_baseline
   assert {r: t[0] for table in collided.values() for r, t in table.items()} == {f"{db}:{r}": 0.0 for r in "abef"}
   with pytest.raises(ValueError, match="outcome"):
     outcomes([db], "hardest+friction-low", "asc-inc-cog", "success; DROP TABLE evals")
+  with pytest.raises(FileNotFoundError, match="no such study database"):  # not a new empty file
+    outcomes([str(tmp_path / "missing.sqlite")], "hardest+friction-low", "asc-inc-cog")
+  assert not (tmp_path / "missing.sqlite").exists()
 
 
 def test_only_the_trials_every_policy_ran_are_compared_and_the_others_counted():

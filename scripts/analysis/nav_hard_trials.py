@@ -152,7 +152,11 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("--out", help="JSON path")
   p.add_argument("--plot", help="PNG path: plan views of the worst trials and, for comparison, the first clean ones")
   args = p.parse_args(argv)
-  tables = outcomes([args.db], args.area, args.task, "collided")
+  try:
+    tables = outcomes([args.db], args.area, args.task, "collided")
+  except FileNotFoundError as e:
+    print(f"error: {e}", file=sys.stderr)
+    return 2
   if not tables:
     print(f"error: no run of {args.task} evaluated on {args.area} in {args.db}", file=sys.stderr)
     return 2

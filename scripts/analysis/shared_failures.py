@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import os
 import sys
 
 import numpy as np
@@ -46,6 +47,8 @@ def outcomes(dbs: list[str], scene: str, task: str, outcome: str = "success") ->
     raise ValueError(f"outcome {outcome!r}: one of {', '.join(OUTCOMES)}")
   out: dict[str, dict[str, dict[int, float]]] = {}
   for db in dbs:
+    if not os.path.isfile(db):
+      raise FileNotFoundError(f"{db}: no such study database")
     with read_only(db) as c:
       rows = c.execute(f"SELECT e.run_id, e.trial, e.{outcome}, x.config_json FROM evals e "  # noqa: S608
                        "JOIN experiments x USING (run_id) "
@@ -88,7 +91,11 @@ def main(argv=None) -> int:
   p.add_argument("--outcome", default="success", choices=OUTCOMES, help="the trial outcome counted")
   p.add_argument("--out", help="write the summary here as JSON (with the device, command and date)")
   args = p.parse_args(argv)
-  tables = outcomes(args.dbs, args.scene, args.task, args.outcome)
+  try:
+    tables = outcomes(args.dbs, args.scene, args.task, args.outcome)
+  except FileNotFoundError as e:
+    print(f"error: {e}", file=sys.stderr)
+    return 2
   if not tables:
     print(f"error: no run of {args.task} evaluated on {args.scene} in {args.dbs}", file=sys.stderr)
     return 2
