@@ -39,6 +39,8 @@ STEP = (
     Metric("physics_nan", "", "sum", False, "1 at a step whose physics blew up (the episode ends)"),
     Metric("collision", "", "sum", False, "1 at the episode's first step in which the robot touched a wall or "
            "obstacle (nav scenes; a floor obstacle: with anything but a track belt); reward/collision charges every one"),
+    Metric("command_filtered", "", "sum", None, "1 at a step whose command the safety filter slowed "
+           "(control.safety_filter; nav scenes)"),
 )
 STEP_NAMES = tuple(m.name for m in STEP)
 
@@ -51,6 +53,8 @@ EPISODE = (
     Metric("tipped_over", "", "rate", False, "the robot tipped over", True),
     Metric("length", "steps", "mean", None, "control steps the episode lasted", True),
     Metric("collided", "", "rate", False, "the robot touched a wall or obstacle at least once (nav scenes)", True),
+    Metric("filtered", "", "mean", None, "fraction of the episode's control steps whose command the safety filter "
+           "slowed (control.safety_filter)"),
 )
 EPISODE_NAMES = tuple(m.name for m in EPISODE)
 BY_NAME = {m.name: m for m in EPISODE}
@@ -93,6 +97,7 @@ def episode_figures(sums: dict, length) -> dict[str, np.ndarray]:
       "tipped_over": (f("tipped_over") > 0).astype(np.float64),
       "length": length,
       "collided": (f("collision") > 0).astype(np.float64),
+      "filtered": f("command_filtered") / np.maximum(length, 1.0),
   }
   assert tuple(figures) == EPISODE_NAMES
   return figures

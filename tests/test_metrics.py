@@ -20,15 +20,17 @@ def test_episode_figures_match_a_hand_computation():
   sums["goal_reached"][:] = [1, 0]
   sums["tipped_over"][:] = [0, 1]
   sums["collision"][:] = [0, 2]
+  sums["command_filtered"][:] = [1, 0]
   fig = episode_figures(sums, np.array([4, 10]))
   assert tuple(fig) == EPISODE_NAMES
   np.testing.assert_allclose(fig["cog_deviation"], [0.1, 0.0])  # m, mean while on the stairs
   np.testing.assert_allclose(fig["pitch_rate"], [0.5, 0.5])  # rad/s, per step
   assert fig["success"].tolist() == [1.0, 0.0] and fig["tipped_over"].tolist() == [0.0, 1.0]
   assert fig["collided"].tolist() == [0.0, 1.0]  # a rate of episodes, not of steps
+  assert fig["filtered"].tolist() == [0.25, 0.0]  # a fraction of the episode's steps
   row = trial_row(fig, 0)
   assert row == pytest.approx({"progress": 1.0, "success": 1, "cog_deviation": 0.1, "pitch_rate": 0.5,
-                               "tipped_over": 0, "length": 4, "collided": 0})
+                               "tipped_over": 0, "length": 4, "collided": 0, "filtered": 0.25})
   assert [type(row[k]) for k in ("success", "tipped_over", "length", "collided")] == [int] * 4
   assert trial_row(fig, 1)["length"] == 10 and trial_row(fig, 1)["collided"] == 1
 

@@ -129,6 +129,16 @@ def load_yaml(text: str, source: str, key: str | None = None):
 
 
 @dataclasses.dataclass(frozen=True)
+class SafetyFilterConfig:
+  """control.safety_filter: mjx_tracks.envs.safety_filter."""
+  enabled: bool
+  rays: int = dataclasses.field(metadata=bound(8, 720))  # rays of its horizontal scan ring
+  horizon: float = dataclasses.field(metadata=bound(0.05, 5.0))  # s, how long each command is predicted held
+  samples: int = dataclasses.field(metadata=bound(1, 50))  # predicted poses, evenly in (0, horizon]
+  margin: float = dataclasses.field(metadata=bound(0.0, 1.0))  # m, the least clearance a kept command keeps
+
+
+@dataclasses.dataclass(frozen=True)
 class ControlConfig:
   mode: str  # mjx_tracks.sim.control.CONTROL_MODES
   increments: bool  # the original's +-pi/10 increments, else absolute targets
@@ -136,6 +146,7 @@ class ControlConfig:
   period: float = dataclasses.field(metadata=bound(0.01, 2.0))  # s between actions
   dof_curriculum: tuple[tuple[str, float], ...]  # (joint action dimension, eps from which it acts)
   start_pose: tuple[tuple[str, float], ...]  # (joint group, rad): where those joints start; the others at 0
+  safety_filter: SafetyFilterConfig  # a layer under the policy that slows a command heading into a wall
 
   def validate(self, key: str) -> None:
     from mjx_tracks.sim.control import CONTROL_MODES, unlock_values  # noqa: PLC0415
@@ -475,6 +486,9 @@ class TaskConfig:
     require("collision" in kind.signals or not (self.episode.end_on_collision or self.reward.collision_penalty),
             "episode.end_on_collision" if self.episode.end_on_collision else "reward.collision_penalty",
             lambda: f"{self.scene.kind} scenes have nothing to collide with (collisions: nav scenes)")
+    require("collision" in kind.signals or not self.control.safety_filter.enabled, "control.safety_filter.enabled",
+            lambda: f"the safety filter reads walls from a horizontal scan, which {self.scene.kind} scenes do not have "
+                    "(on stairs or terrain it would read the ground ahead as a wall); nav scenes only")
     require("clearance" in kind.signals or not self.reward.clearance_penalty, "reward.clearance_penalty",
             lambda: f"{self.scene.kind} scenes measure no clearance from walls (it is measured in nav scenes)")
     steps = self.control.period / self.physics.timestep
@@ -619,6 +633,7 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("evaluation", "held_out"): [],  # before the evaluation suite: none
               ("control", "dof_curriculum"): [],  # before the DOF curriculum: every dimension acts
               ("control", "start_pose"): [],  # before start poses: every joint at 0
+              ("control", "safety_filter"): FROM_DEFAULTS,  # before the safety filter: none (enabled: false)
               ("scene", "terrains"): [],  # before terrain tasks: none
               ("scene", "nav_floor_obstacles"): 0,  # before floor obstacles: none
               ("scene", "nav_floor_height"): FROM_DEFAULTS,

@@ -18,6 +18,7 @@ from mjx_tracks.envs.beams import BeamLayout, depth_beams
 from mjx_tracks.envs.config import ConfigError, SceneConfig, TaskConfig
 from mjx_tracks.envs.observations import Sensors, observe, part_sizes, stack
 from mjx_tracks.envs import randomization as rnd
+from mjx_tracks.envs.safety_filter import SafetyFilter
 from mjx_tracks.envs.scan import ScanLayout, scan_ranges
 from mjx_tracks.envs.rewards import Monitor, cog_deviation, goal_distance, normalizer_init, on_stairs
 from mjx_tracks.metrics import STEP_NAMES as METRICS  # the per-step metrics (mjx_tracks.metrics.STEP)
@@ -88,6 +89,10 @@ class TrackedRobotEnv(Env):
         o.band_px, o.rays_per_band, o.depth_range, self.robot.camera_range[1], o.noise)
     self.scan = ScanLayout(o.scan_rays if "scan" in o.parts else 0, o.scan_range, self.robot.lidar_pos,
                            tuple(o.scan_pitches))
+    f = cfg.control.safety_filter
+    self.safety = (SafetyFilter(ScanLayout(f.rays, o.scan_range, self.robot.lidar_pos, (0.0,)), self.footprint, f.horizon,
+                                f.samples, f.margin, self.robot.max_speed, self.robot.max_yaw_rate)
+                   if f.enabled else None)  # None: commands go to the belts as the policy gives them
     self.rand = cfg.randomization
     self.randomized = cfg.randomization.enabled or every_path  # the state carries a RobustState
     self.acting = frozenset(g for g in rnd.GROUPS if every_path or cfg.randomization.acts(g))  # costly paths compiled
@@ -117,6 +122,7 @@ class TrackedRobotEnv(Env):
     es: EnvState = state.pipeline_state
     m = self._model(es.scene, es.robust)
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
+    v, w, filtered = self._safe_command(m, es, v, w)
     data, collided, robust, belts = self._advance(m, es, self.controller.belt_speeds(v, w), targets)
     data = self._sense(m, data)
     # a physics blow-up ends the episode and keeps the last finite state
@@ -144,7 +150,7 @@ class TrackedRobotEnv(Env):
     # keys stay those of reset (wrappers may add their own): update values in place
     flags = {**flags, "first_collision": collided & ~state.pipeline_state.collided}
     metrics = {**state.metrics,
-               **self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite)}
+               **self._metrics(terms, progress * finite, cog, on_stairs, pitch_rate, flags, ~finite, filtered)}
     reward = sum(terms.values())
     return state.replace(pipeline_state=es, obs=self._obs(es, m, k_obs, state.obs, belts), reward=reward,
                          done=terminated.astype(jnp.float32), metrics=metrics)
@@ -211,6 +217,17 @@ class TrackedRobotEnv(Env):
     else:
       data, collided = self.sim.advance(m, data, belts, targets, n, **late), jnp.bool_(False)
     return data, collided, robust, ran
+
+  def _safe_command(self, m: mjx.Model, es: EnvState, v: jax.Array, w: jax.Array):
+    """(v m/s, w rad/s, whether the safety filter changed them): the command the belts get
+    (mjx_tracks.envs.safety_filter), its ring read from the state the step starts from, with the
+    episode's scan noise."""
+    if self.safety is None:
+      return v, w, jnp.bool_(False)
+    p = None if es.robust is None else es.robust.perturbation
+    ranges = scan_ranges(self.safety.scan, m, es.data, self.sim.layout.chassis_body, jax.random.fold_in(es.key, 13),
+                         None if p is None else p.depth_noise, None if p is None else p.hidden)
+    return self.safety.choose(v, w, ranges)
 
   def _start(self, scene: SceneState, key: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """The robot's start: the scene's spawn (ground point, yaw) and joints at control.start_pose (0
@@ -289,13 +306,13 @@ class TrackedRobotEnv(Env):
     o = self.cfg.observation
     return stack(observe(o.parts, self.sensors(es, m, key, belts), self.robot), previous, o.history)
 
-  def _metrics(self, terms, progress, cog, on_stairs, pitch_rate, flags, nan) -> dict[str, jax.Array]:
+  def _metrics(self, terms, progress, cog, on_stairs, pitch_rate, flags, nan, filtered) -> dict[str, jax.Array]:
     f = lambda x: jnp.asarray(x, jnp.float32)
     out = {f"reward/{k}": f(v) for k, v in terms.items()}
     out.update(progress=f(progress), cog_deviation=f(cog), on_stairs=f(on_stairs),
                pitch_rate=f(pitch_rate), tipped_over=f(flags["tipped"]),
                goal_reached=f(flags["reached"]), moved_away=f(flags["away"]), physics_nan=f(nan),
-               collision=f(flags["first_collision"]))
+               collision=f(flags["first_collision"]), command_filtered=f(filtered))
     assert tuple(out) == METRICS
     return out
 

@@ -1,0 +1,182 @@
+"""Safety filter (mjx_tracks.envs.safety_filter): its geometry against plain-Python references
+(Euler-integrated unicycle, point-to-segment distances), its choice against a brute-force search,
+and in the environment: full throttle at a wall stops short of it, where without the filter the
+same start touches it (the collision watch, tested against the C engine in test_collisions.py)."""
+
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mjx_tracks
+from mjx_tracks.envs.config import ConfigError, load_config
+from mjx_tracks.envs.safety_filter import SCALES, SafetyFilter, footprint_distance, unicycle_poses
+from mjx_tracks.envs.scan import ScanLayout
+
+HALF = (0.505, 0.39)  # m, robot 1's footprint (test_collisions.py derives it)
+
+
+def _euler_pose(v, w, t, n=20000):
+  x = y = yaw = 0.0
+  dt = t / n
+  for _ in range(n):
+    x += v * math.cos(yaw + 0.5 * w * dt) * dt
+    y += v * math.sin(yaw + 0.5 * w * dt) * dt
+    yaw += w * dt
+  return x, y, yaw
+
+
+@pytest.mark.parametrize("v,w", [(1.0, 0.0), (0.6, 1.0), (0.3, -0.7), (0.0, 1.0), (0.8, 1e-6)])
+def test_unicycle_poses_match_integrated_motion(v, w):
+  times = np.array([0.1, 0.25, 0.5], np.float32)
+  got = np.asarray(unicycle_poses(jnp.float32(v), jnp.float32(w), jnp.asarray(times)))
+  for t, pose in zip(times, got):
+    assert pose == pytest.approx(_euler_pose(v, w, float(t)), abs=2e-5)
+
+
+def _segment_distance(p, a, b):
+  ab, ap = b - a, p - a
+  s = np.clip(ap @ ab / (ab @ ab), 0.0, 1.0)
+  return float(np.linalg.norm(ap - s * ab))
+
+
+def _rect_distance(p, pose, half):
+  """Plain reference: 0 inside, else the least distance to the rectangle's four edges."""
+  c, s = math.cos(pose[2]), math.sin(pose[2])
+  corners = [np.array([pose[0] + c * x - s * y, pose[1] + s * x + c * y])
+             for x, y in ((half[0], half[1]), (-half[0], half[1]), (-half[0], -half[1]), (half[0], -half[1]))]
+  local = np.array([c * (p[0] - pose[0]) + s * (p[1] - pose[1]), -s * (p[0] - pose[0]) + c * (p[1] - pose[1])])
+  if abs(local[0]) <= half[0] and abs(local[1]) <= half[1]:
+    return 0.0
+  return min(_segment_distance(p, corners[i], corners[(i + 1) % 4]) for i in range(4))
+
+
+def test_footprint_distance_matches_edge_distances():
+  rng = np.random.default_rng(0)
+  points = rng.uniform(-1.5, 1.5, (200, 2))
+  for pose in ([0.0, 0.0, 0.0], [0.3, -0.2, 0.7], [-0.5, 0.4, -2.5]):
+    got = np.asarray(footprint_distance(jnp.asarray(points, jnp.float32), jnp.asarray(pose, jnp.float32), jnp.asarray(HALF)))
+    want = [_rect_distance(p, pose, HALF) for p in points]
+    assert got == pytest.approx(want, abs=1e-5)
+  assert (np.asarray(got) == 0).any() and (np.asarray(got) > 0).any()  # both sides of the edge were sampled
+
+
+def _filter(rays=8, horizon=0.5, samples=10, margin=0.05):
+  return SafetyFilter(ScanLayout(rays, 5.0, (0.0, 0.0, 0.2), (0.0,)), HALF, horizon, samples, margin, 1.0, 1.0)
+
+
+def _ranges(f, hits: dict[int, float]):
+  """The ring's ranges with ray k hitting at hits[k] m, the others reading nothing (max range)."""
+  r = np.full(f.scan.n_rays, f.scan.max_range, np.float32)
+  for k, d in hits.items():
+    r[k] = d
+  return jnp.asarray(r)
+
+
+def test_clearance_of_a_straight_drive_is_the_hand_derived_gap():
+  f = _filter()
+  points, hit = f.points(_ranges(f, {0: 2.0}))  # a point 2 m straight ahead
+  for v in (0.0, 0.5, 1.0):
+    assert float(f.clearance(points, hit, jnp.float32(v), jnp.float32(0.0))) == pytest.approx(2.0 - 0.505 - 0.5 * v, abs=1e-5)
+  none = jnp.zeros(f.scan.n_rays, bool)
+  assert float(f.clearance(points, none, jnp.float32(1.0), jnp.float32(0.0))) >= 100.0  # no hit: nothing near
+
+
+def _brute_force_choice(f, v, w, points, hit):
+  """The rule of the module docstring, step 4, by enumeration in plain Python."""
+  cands = [(a * v, b * w) for a in SCALES for b in SCALES]
+  now = float(f.clearance(points, hit, jnp.float32(0.0), jnp.float32(0.0)))
+  ok = [(abs(x - v) + abs(y - w), i) for i, (x, y) in enumerate(cands)
+        if float(f.clearance(points, hit, jnp.float32(x), jnp.float32(y))) >= min(f.margin, now) - 1e-5]
+  return cands[min(ok)[1]]
+
+
+def test_choice_slows_just_enough_and_matches_brute_force():
+  f = _filter()
+  # a wall point 1.05 m ahead: clearance 0.545 - 0.5 a v >= 0.05 keeps a <= 0.99 at v = 1: 0.75 is the largest safe scale
+  points, hit = f.points(_ranges(f, {0: 1.05}))
+  v, w, changed = f.choose(jnp.float32(1.0), jnp.float32(0.0), _ranges(f, {0: 1.05}))
+  assert (float(v), float(w), bool(changed)) == (0.75, 0.0, True)
+  v, w, changed = f.choose(jnp.float32(0.5), jnp.float32(0.0), _ranges(f, {0: 1.05}))
+  assert (float(v), bool(changed)) == (0.5, False)  # already safe: unchanged
+  rng = np.random.default_rng(1)
+  for _ in range(12):  # random walls of points, commands turning either way
+    ranges = _ranges(f, {int(k): float(rng.uniform(0.45, 1.4)) for k in rng.choice(8, 3, replace=False)})
+    cmd = (float(rng.uniform(0, 1)), float(rng.uniform(-1, 1)))
+    points, hit = f.points(ranges)
+    got = f.choose(jnp.float32(cmd[0]), jnp.float32(cmd[1]), ranges)
+    assert (float(got[0]), float(got[1])) == pytest.approx(_brute_force_choice(f, *cmd, points, hit), abs=1e-6)
+
+
+def test_a_turn_that_sweeps_a_corner_into_a_wall_is_slowed():
+  """Turning in place by theta, a point 0.605 m ahead on the centre line lies 0.605 cos(theta) along
+  the chassis: its clearance 0.605 cos(theta) - 0.505 stays >= the 0.05 m margin while theta <=
+  acos(0.555 / 0.605) = 0.409 rad. In the 0.5 s horizon, 1 rad/s turns 0.5 rad (unsafe), 0.75 rad/s
+  0.375 rad (safe): the filter keeps three quarters of the turn."""
+  f = _filter(rays=8)
+  v, w, changed = f.choose(jnp.float32(0.0), jnp.float32(1.0), _ranges(f, {0: 0.605}))
+  assert (float(v), float(w), bool(changed)) == (0.0, 0.75, True)
+  v, w, changed = f.choose(jnp.float32(0.0), jnp.float32(-1.0), _ranges(f, {0: 0.605}))
+  assert (float(w), bool(changed)) == (-0.75, True)  # either way round
+
+
+def test_alongside_a_wall_inside_the_margin_it_keeps_a_parallel_course_and_stops_the_swing():
+  """A wall 0.03 m beside the footprint's left side (y = 0.42 m; margin 0.05): driving straight keeps
+  the 0.03 m (kept: the filter never traps the robot where it is), while turning either way swings a
+  corner towards the wall (left: the front one; right: the rear one, the centre's 0.12 m step away
+  in 0.5 s at 1 m/s being less than the corner's 0.24 m swing): the turn is dropped, the speed kept."""
+  f = _filter(rays=180)
+  angle = 2 * np.pi * np.arange(180) / 180
+  ranges = jnp.asarray(np.where(np.sin(angle) > 0.1, 0.42 / np.maximum(np.sin(angle), 1e-9), 5.0).clip(max=5.0), jnp.float32)
+  for w in (0.0, 1.0, -1.0):
+    got = tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(w), ranges)))
+    assert got == (1.0, 0.0, float(w != 0.0)), w
+
+
+def test_config_refuses_the_filter_where_nothing_is_a_wall():
+  with pytest.raises(ConfigError, match="safety_filter"):
+    load_config("asc-inc-cog", ["control.safety_filter.enabled=true"])
+  with pytest.raises(ConfigError, match="margin"):
+    load_config("nav", ["control.safety_filter.margin=-0.1"])
+
+
+@functools.lru_cache(maxsize=None)
+def _drives():
+  """jitted drive(start x m) for the filtered and unfiltered nav env: full throttle for 16 control
+  steps (4 s) from x, heading +x, at a wall obstacle whose face is at x = 6 m; returns whether it
+  collided, the chassis' final x (m) and the steps the filter acted on."""
+  out = {}
+  for on in (False, True):
+    env = mjx_tracks.load("nav", [f"control.safety_filter.enabled={str(on).lower()}", "control.mode=4dof"])
+    state0 = env.reset(jax.random.PRNGKey(0))
+    far = jnp.array([-20.0, 0.0, -5.0])
+
+    def drive(x, env=env, state0=state0):
+      es = state0.pipeline_state
+      pos = es.scene.box_pos.at[0].set(jnp.array([6.5, 0.0, 0.5])).at[1].set(far)
+      size = es.scene.box_size.at[0].set(jnp.array([0.5, 0.6, 0.5]))
+      scene = es.scene.replace(box_pos=pos, box_size=size, box_yaw=es.scene.box_yaw.at[0].set(0.0))
+      data = env._sense(env._model(scene, None), env.sim.init_data(jnp.array([x, 0.0, 0.0]), jnp.float32(0.0)))
+      s = state0.replace(pipeline_state=es.replace(scene=scene, data=data))
+      full = jnp.array([1.0, 0.0, 0.0, 0.0])
+
+      def body(s, _):
+        n = env.step(s, full)
+        return n, (n.pipeline_state.collided, n.metrics["command_filtered"])
+      s, (collided, filtered) = jax.lax.scan(body, s, None, length=16)
+      return collided.any(), s.pipeline_state.data.qpos[0], filtered.sum()
+    out[on] = jax.jit(drive)
+  return out
+
+
+def test_full_throttle_at_a_wall_stops_short_with_the_filter_and_touches_it_without():
+  drives = _drives()
+  collided, x, filtered = map(float, drives[False](jnp.float32(3.0)))
+  assert collided and filtered == 0  # 3 m in 4 s at up to 1 m/s: the front (x + 0.505) reaches the face at 6 m
+  collided, x, filtered = map(float, drives[True](jnp.float32(3.0)))
+  assert not collided and filtered > 0
+  gap = 6.0 - (x + 0.505)  # m, the footprint's front to the wall
+  assert 0.0 < gap < 0.6  # it came near (held back within a horizon's travel plus the margin) and stopped
