@@ -1,7 +1,8 @@
 """What touched what? Each run's policy drives the evaluation's trials of a navigation area again
 (the run's config, the area's draw, reset keys split from EVAL_SEED, eps EVAL_EPS, the exported
 policy, deterministic: train.evaluate's trials). Beside each control step its physics substeps are
-run again one by one from the same state and command (the env's _advance without randomization:
+run again one by one from the same state and command (the safety filter's, where the run has one;
+the env's _advance without randomization:
 tasks with randomization are refused), and the first collision contact of the substep where a
 trial's first collision happens names the robot geom and the world geom
 (mjx_tracks.sim.collisions). A step the env flags that the replayed substeps do not is counted
@@ -65,6 +66,7 @@ def substep_pair(core, s, action) -> jax.Array:
   es = s.pipeline_state
   m = core._model(es.scene, es.robust)
   v, w, targets = core.controller.decode(action, es.targets, s.info["eps"])
+  v, w, _ = core._safe_command(m, es, v, w)  # the safety filter's command, where the run has one
   belts = core.controller.belt_speeds(v, w)
 
   def sub(_, carry):
