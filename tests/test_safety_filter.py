@@ -121,6 +121,17 @@ def test_a_turn_that_sweeps_a_corner_into_a_wall_is_slowed():
   assert (float(w), bool(changed)) == (-0.75, True)  # either way round
 
 
+def test_backing_up_is_checked_against_what_lies_behind():
+  """With a reverse speed (control.v_range below 0), a point 0.8 m behind (ray 4 of 8): backing at
+  0.5 m/s for 0.5 s leaves 0.8 - 0.505 - 0.25 = 0.045 m (< 0.1: unsafe), at 0.375 m/s 0.1075 m: the
+  filter keeps three quarters of the speed; a point 0.8 m ahead lets the same reverse command through."""
+  f = _filter()
+  v, w, changed = f.choose(jnp.float32(-0.5), jnp.float32(0.0), _ranges(f, {4: 0.8}))
+  assert (float(v), bool(changed)) == (-0.375, True)
+  v, w, changed = f.choose(jnp.float32(-0.5), jnp.float32(0.0), _ranges(f, {0: 0.8}))
+  assert (float(v), bool(changed)) == (-0.5, False)
+
+
 def test_alongside_a_wall_inside_the_margin_it_keeps_a_parallel_course_and_stops_the_swing():
   """A wall 0.03 m beside the footprint's left side (y = 0.42 m; margin 0.05): driving straight keeps
   the 0.03 m (kept: the filter never traps the robot where it is), while turning either way swings a
