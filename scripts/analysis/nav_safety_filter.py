@@ -92,10 +92,10 @@ def main(argv: list[str] | None = None) -> int:
     named = variants(args.variant)
     raw = from_dict(shared_config(args.runs)).to_dict()  # with the keys added since they ran (the filter's among them)
     settings = {AS_TRAINED: from_dict(raw), **{k: from_dict(functools.reduce(apply_override, v, raw)) for k, v in named.items()}}
-  except ValueError as e:  # ConfigError is one
+    loaded = [load_policy_params(os.path.join(r, "policy")) for r in args.runs]
+  except (ValueError, FileNotFoundError) as e:  # ConfigError is a ValueError
     p.error(str(e))
   compile_cache.enable()
-  loaded = [load_policy_params(os.path.join(r, "policy")) for r in args.runs]
   spec, params = loaded[0][0], jax.tree_util.tree_map(lambda *x: np.stack(x), *(pp for _, pp in loaded))
   rows = []
   for area in args.areas.split(","):
