@@ -42,14 +42,13 @@ def _segment_distance(p, a, b):
 
 
 def _rect_distance(p, pose, half):
-  """Plain reference: 0 inside, else the least distance to the rectangle's four edges."""
+  """Plain reference: the least distance to the rectangle's four edges, negative inside."""
   c, s = math.cos(pose[2]), math.sin(pose[2])
   corners = [np.array([pose[0] + c * x - s * y, pose[1] + s * x + c * y])
              for x, y in ((half[0], half[1]), (-half[0], half[1]), (-half[0], -half[1]), (half[0], -half[1]))]
   local = np.array([c * (p[0] - pose[0]) + s * (p[1] - pose[1]), -s * (p[0] - pose[0]) + c * (p[1] - pose[1])])
-  if abs(local[0]) <= half[0] and abs(local[1]) <= half[1]:
-    return 0.0
-  return min(_segment_distance(p, corners[i], corners[(i + 1) % 4]) for i in range(4))
+  edges = min(_segment_distance(p, corners[i], corners[(i + 1) % 4]) for i in range(4))
+  return -edges if abs(local[0]) <= half[0] and abs(local[1]) <= half[1] else edges
 
 
 def test_footprint_distance_matches_edge_distances():
@@ -59,7 +58,7 @@ def test_footprint_distance_matches_edge_distances():
     got = np.asarray(footprint_distance(jnp.asarray(points, jnp.float32), jnp.asarray(pose, jnp.float32), jnp.asarray(HALF)))
     want = [_rect_distance(p, pose, HALF) for p in points]
     assert got == pytest.approx(want, abs=1e-5)
-  assert (np.asarray(got) == 0).any() and (np.asarray(got) > 0).any()  # both sides of the edge were sampled
+  assert (np.asarray(got) < 0).any() and (np.asarray(got) > 0).any()  # both sides of the edges were sampled
 
 
 def _filter(rays=8, horizon=0.5, samples=10, margin=0.05):
@@ -83,12 +82,24 @@ def test_clearance_of_a_straight_drive_is_the_hand_derived_gap():
   assert float(f.clearance(points, none, jnp.float32(1.0), jnp.float32(0.0))) >= 100.0  # no hit: nothing near
 
 
-def _brute_force_choice(f, v, w, points, hit):
+def _plain_clearance(f, points, v, w):
+  """The least signed distance of the points from the footprint along (v, w) held, in plain Python
+  (closed-form unicycle poses, _rect_distance)."""
+  out = math.inf
+  for j in range(1, f.samples + 1):
+    t = f.horizon * j / f.samples
+    u = w * t
+    x, y = (v * t, 0.0) if abs(u) < 1e-9 else (v * math.sin(u) / w, v * (1 - math.cos(u)) / w)
+    out = min([out, *(_rect_distance(p, (x, y, u), HALF) for p in points)])
+  return out
+
+
+def _brute_force_choice(f, v, w, points):
   """The rule of the module docstring, step 4, by enumeration in plain Python."""
   cands = [(a * v, b * w) for a in SCALES for b in SCALES]
-  now = float(f.clearance(points, hit, jnp.float32(0.0), jnp.float32(0.0)))
+  now = _plain_clearance(f, points, 0.0, 0.0)
   ok = [(abs(x - v) + abs(y - w), i) for i, (x, y) in enumerate(cands)
-        if float(f.clearance(points, hit, jnp.float32(x), jnp.float32(y))) >= min(f.margin, now) - 1e-5]
+        if _plain_clearance(f, points, x, y) >= min(f.margin, now) - 1e-5]
   return cands[min(ok)[1]]
 
 
@@ -101,12 +112,17 @@ def test_choice_slows_just_enough_and_matches_brute_force():
   v, w, changed = f.choose(jnp.float32(0.5), jnp.float32(0.0), _ranges(f, {0: 1.05}))
   assert (float(v), bool(changed)) == (0.5, False)  # already safe: unchanged
   rng = np.random.default_rng(1)
-  for _ in range(12):  # random walls of points, commands turning either way
-    ranges = _ranges(f, {int(k): float(rng.uniform(0.45, 1.4)) for k in rng.choice(8, 3, replace=False)})
+  changed = inside = 0
+  for _ in range(16):  # random points round the robot, some inside the footprint; commands turning either way
+    ranges = _ranges(f, {int(k): float(rng.uniform(0.35, 1.1)) for k in rng.choice(8, 3, replace=False)})
     cmd = (float(rng.uniform(0, 1)), float(rng.uniform(-1, 1)))
     points, hit = f.points(ranges)
+    pts = [np.asarray(p, np.float64) for p, h in zip(np.asarray(points), np.asarray(hit)) if h]
     got = f.choose(jnp.float32(cmd[0]), jnp.float32(cmd[1]), ranges)
-    assert (float(got[0]), float(got[1])) == pytest.approx(_brute_force_choice(f, *cmd, points, hit), abs=1e-6)
+    assert (float(got[0]), float(got[1])) == pytest.approx(_brute_force_choice(f, *cmd, pts), abs=1e-5)
+    changed += bool(got[2])
+    inside += _plain_clearance(f, pts, 0.0, 0.0) < 0
+  assert changed >= 6 and inside >= 2  # the draws exercise the choice, also from inside the footprint
 
 
 def test_a_turn_that_sweeps_a_corner_into_a_wall_is_slowed():
@@ -121,9 +137,18 @@ def test_a_turn_that_sweeps_a_corner_into_a_wall_is_slowed():
   assert (float(w), bool(changed)) == (-0.75, True)  # either way round
 
 
+def test_a_hit_inside_the_footprint_refuses_going_deeper():
+  """A hit 0.45 m ahead lies 0.055 m inside the front edge (0.505 m): driving on takes it deeper, and
+  so does turning (its depth from the front edge, 0.505 - 0.45 cos(theta), grows): only standing still
+  keeps it no deeper; backing away (a reverse speed) is kept."""
+  f = _filter()
+  assert tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(0.5), _ranges(f, {0: 0.45})))) == (0.0, 0.0, 1.0)
+  assert tuple(map(float, f.choose(jnp.float32(-0.5), jnp.float32(0.0), _ranges(f, {0: 0.45})))) == (-0.5, 0.0, 0.0)
+
+
 def test_backing_up_is_checked_against_what_lies_behind():
   """With a reverse speed (control.v_range below 0), a point 0.8 m behind (ray 4 of 8): backing at
-  0.5 m/s for 0.5 s leaves 0.8 - 0.505 - 0.25 = 0.045 m (< 0.1: unsafe), at 0.375 m/s 0.1075 m: the
+  0.5 m/s for 0.5 s leaves 0.8 - 0.505 - 0.25 = 0.045 m (< 0.05: unsafe), at 0.375 m/s 0.1075 m: the
   filter keeps three quarters of the speed; a point 0.8 m ahead lets the same reverse command through."""
   f = _filter()
   v, w, changed = f.choose(jnp.float32(-0.5), jnp.float32(0.0), _ranges(f, {4: 0.8}))
@@ -136,7 +161,7 @@ def test_alongside_a_wall_inside_the_margin_it_keeps_a_parallel_course_and_stops
   """A wall 0.03 m beside the footprint's left side (y = 0.42 m; margin 0.05): driving straight keeps
   the 0.03 m (kept: the filter never traps the robot where it is), while turning either way swings a
   corner towards the wall (left: the front one; right: the rear one, the centre's 0.12 m step away
-  in 0.5 s at 1 m/s being less than the corner's 0.24 m swing): the turn is dropped, the speed kept."""
+  in 0.5 s at 1 m/s being less than the corner's 0.19 m swing): the turn is dropped, the speed kept."""
   f = _filter(rays=180)
   angle = 2 * np.pi * np.arange(180) / 180
   ranges = jnp.asarray(np.where(np.sin(angle) > 0.1, 0.42 / np.maximum(np.sin(angle), 1e-9), 5.0).clip(max=5.0), jnp.float32)

@@ -7,21 +7,23 @@ belts:
 1. Sense: the filter's own horizontal ring of `rays` rays from the laser scanner
    (mjx_tracks.envs.scan, pitch 0: it passes over nav's floor obstacles and reads walls), with the
    scan's noise where the robustness suite perturbs it. Each hit within range is a point (x, y) in
-   the chassis frame (m); a ray that hits nothing (or is lost) gives none.
+   the chassis frame (m); a ray that hits nothing (or is lost: the filter then sees free space)
+   gives none.
 2. Predict: a command (v m/s, w rad/s) held for `horizon` s moves the chassis as a unicycle:
    yaw(t) = w t, x(t) = v sin(w t) / w, y(t) = v (1 - cos(w t)) / w (x = v t where w = 0), taken at
    `samples` times evenly spaced in (0, horizon].
-3. Clearance: the least distance (m) of a point from the robot's footprint at those poses. The
-   footprint is the rectangle of half-sizes `half` round the chassis origin that holds every
+3. Clearance: the least signed distance (m) of a point from the robot's footprint at those poses
+   (negative inside it: minus the depth to its nearest edge). The footprint is the rectangle of half-sizes `half` round the chassis origin that holds every
    colliding geom at rest (mjx_tracks.sim.collisions.footprint_half: flippers in line, their longest
    reach; at any other flipper angle they reach less far).
 4. Choose: of the candidates (a v, b w), a and b each in SCALES, the one nearest the command
    (|dv| / v_scale + |dw| / w_scale) whose clearance is at least `margin`, or, where the robot is
-   already nearer than that (clearance standing still: now), at least now: it never brings the
-   robot nearer than margin, nor nearer than it is. Standing still always qualifies; the command
-   itself, where it qualifies, is kept.
-Joint targets pass unchanged. Only speeds are scaled down: the filter never drives where the policy
-did not ask to go.
+   already nearer than that (clearance standing still: now, negative where a hit lies inside the
+   footprint), at least now: it never brings the robot nearer than margin, nor nearer than it is.
+   Standing still always qualifies (for finite ranges); the command itself, where it qualifies, is
+   kept; of equally near candidates, the one with the larger v.
+Joint targets pass unchanged. The filter only scales v and w towards 0, never raising or reversing
+them; scaling them unequally changes the path's curvature.
 """
 
 from __future__ import annotations
@@ -50,12 +52,13 @@ def unicycle_poses(v: jax.Array, w: jax.Array, times: jax.Array) -> jax.Array:
 
 
 def footprint_distance(points: jax.Array, pose: jax.Array, half: jax.Array) -> jax.Array:
-  """(N,) m: each point's (N, 2) distance from the rectangle of half-sizes half (2,) at pose (x, y,
-  yaw); 0 inside it."""
+  """(N,) m: each point's (N, 2) signed distance from the rectangle of half-sizes half (2,) at pose
+  (x, y, yaw): outside, the distance to it; inside, minus the distance to its nearest edge."""
   c, s = jnp.cos(pose[2]), jnp.sin(pose[2])
   rel = points - pose[:2]
   local = jnp.stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]], axis=-1)
-  return jnp.linalg.norm(jnp.maximum(jnp.abs(local) - half, 0.0), axis=-1)
+  excess = jnp.abs(local) - half  # (N, 2) m beyond each pair of edges (negative: inside them)
+  return jnp.linalg.norm(jnp.maximum(excess, 0.0), axis=-1) + jnp.minimum(jnp.max(excess, axis=-1), 0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,7 +80,7 @@ class SafetyFilter:
     return pts, ranges < self.scan.max_range
 
   def clearance(self, points: jax.Array, hit: jax.Array, v: jax.Array, w: jax.Array) -> jax.Array:
-    """() m: the least distance of a hit from the footprint while (v, w) is held (steps 2-3)."""
+    """() m: the least signed distance of a hit from the footprint while (v, w) is held (steps 2-3)."""
     times = self.horizon * jnp.arange(1, self.samples + 1, dtype=jnp.float32) / self.samples
     poses = unicycle_poses(v, w, times)
     half = jnp.asarray(self.half, jnp.float32)
@@ -93,5 +96,5 @@ class SafetyFilter:
     now = self.clearance(points, hit, jnp.float32(0.0), jnp.float32(0.0))
     cost = jnp.abs(cv - v) / self.v_scale + jnp.abs(cw - w) / self.w_scale
     ok = clear >= jnp.minimum(self.margin, now) - ROUNDING
-    pick = jnp.argmin(jnp.where(ok, cost, jnp.inf))  # the last candidate, standing still, is always ok
+    pick = jnp.argmin(jnp.where(ok, cost, jnp.inf))  # the last candidate, standing still, is ok for finite ranges
     return cv[pick], cw[pick], cost[pick] > 0

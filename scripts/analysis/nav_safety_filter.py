@@ -2,7 +2,7 @@
 same trials. Each run's exported policy drives the evaluation's trials of each area (train.evaluate's
 trials: the area's draw, reset keys from EVAL_SEED, eps EVAL_EPS, deterministic) as the run was
 configured, and with the filter enabled under each --variant (default: one, "filter on", with the
-settings of configs/defaults.yaml). The runs must share one config but for the seed; their policies
+settings of configs/defaults.yaml; a variant may turn it off, for runs trained with it). The runs must share one config but for the seed; their policies
 run as one program per area and setting. Per run, area and setting: success, collisions, time-outs
 (neither reaching the goal, colliding nor tipping over), the fraction of steps the filter acted; and
 trial by trial against the run as configured, the collisions each variant removed and the successes
