@@ -36,6 +36,7 @@ import jax.numpy as jnp
 from mjx_tracks.envs.scan import ScanLayout
 
 SCALES = (1.0, 0.75, 0.5, 0.25, 0.0)  # the fractions of v and of w the candidates keep
+assert SCALES[0] == 1.0 and SCALES[-1] == 0.0  # choose(): the first candidate is the command, the last standing still
 FAR = 1e3  # m, the clearance where the scan holds no point
 ROUNDING = 1e-5  # m, float32 rounding allowed below the threshold (standing still meets it exactly)
 
@@ -91,9 +92,9 @@ class SafetyFilter:
     """(v m/s, w rad/s, whether the command changed) for the command (v, w) and the ring's ranges (step 4)."""
     points, hit = self.points(ranges)
     a, b = (x.ravel() for x in jnp.meshgrid(jnp.asarray(SCALES), jnp.asarray(SCALES), indexing="ij"))
-    cv, cw = a * v, b * w  # candidates; SCALES[0] == 1: the first is the command itself
+    cv, cw = a * v, b * w  # candidates; SCALES[0] == 1: the first is the command itself, the last standing still
     clear = jax.vmap(lambda x, y: self.clearance(points, hit, x, y))(cv, cw)
-    now = self.clearance(points, hit, jnp.float32(0.0), jnp.float32(0.0))
+    now = clear[-1]  # standing still: the clearance where the robot is
     cost = jnp.abs(cv - v) / self.v_scale + jnp.abs(cw - w) / self.w_scale
     ok = clear >= jnp.minimum(self.margin, now) - ROUNDING
     pick = jnp.argmin(jnp.where(ok, cost, jnp.inf))  # the last candidate, standing still, is ok for finite ranges
