@@ -9,6 +9,9 @@ import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "analysis"))
 from nav_filter_trace import COLUMNS, motion  # noqa: E402
+
+from mjx_tracks.envs.safety_filter import SafetyFilter  # noqa: E402
+from mjx_tracks.envs.scan import ScanLayout  # noqa: E402
 from nav_safety_filter import ON, outcomes, paired, variants  # noqa: E402
 
 
@@ -36,6 +39,13 @@ def test_motion_is_read_in_the_chassis_frame():
   start = dict(zip(COLUMNS, views[0]), filtered_v=0.8, filtered_w=0.0, yaw=np.pi / 2)
   views[0] = [start[c] for c in COLUMNS]
   views[1] = [dict(start, x=-0.1, y=0.2, yaw=np.pi / 2 + 0.1)[c] for c in COLUMNS]
-  predicted, actual = motion(views, 0, 0.25)
+  predicted, actual = motion(_filter(0.0), views, 0, 0.25)
   assert predicted == pytest.approx([0.2, 0.0, 0.0], abs=1e-6)
   assert actual == pytest.approx([0.2, 0.1, 0.1], abs=1e-3)
+  # with a response time of 0.25 s from a measured 0.4 m/s forward: 0.8 t - 0.4 tau (1 - e^-1) = 0.1368 m
+  views[0, COLUMNS.index("forward")] = 0.4
+  assert motion(_filter(0.25), views, 0, 0.25)[0] == pytest.approx([0.137, 0.0, 0.0], abs=1e-3)
+
+
+def _filter(response):
+  return SafetyFilter(ScanLayout(8, 5.0, (0.0, 0.0, 0.2), (0.0,)), (0.5, 0.4), 0.5, 10, 0.1, 1.0, 1.0, response)

@@ -11,7 +11,8 @@ import pytest
 
 import mjx_tracks
 from mjx_tracks.envs.config import ConfigError, load_config
-from mjx_tracks.envs.safety_filter import SCALES, SafetyFilter, footprint_distance, unicycle_poses
+from mjx_tracks.envs.safety_filter import SCALES, SafetyFilter, footprint_distance, relaxed_poses, unicycle_poses
+from mjx_tracks.sim.pose import chassis_velocity
 from mjx_tracks.envs.scan import ScanLayout
 
 HALF = (0.505, 0.39)  # m, robot 1's footprint (test_collisions.py derives it)
@@ -33,6 +34,44 @@ def test_unicycle_poses_match_integrated_motion(v, w):
   got = np.asarray(unicycle_poses(jnp.float32(v), jnp.float32(w), jnp.asarray(times)))
   for t, pose in zip(times, got):
     assert pose == pytest.approx(_euler_pose(v, w, float(t)), abs=2e-5)
+
+
+def _euler_relaxed_pose(v, w, measured, tau, t, n=20000):
+  """Plain reference of relaxed_poses: body velocity (v + (u0 - v) e, s0 e, w + (r0 - w) e),
+  e = exp(-t / tau), integrated by small Euler steps in the plane."""
+  u0, s0, r0 = measured
+  x = y = yaw = 0.0
+  dt = t / n
+  for i in range(n):
+    e = math.exp(-(i + 0.5) * dt / tau)
+    u, s, r = v + (u0 - v) * e, s0 * e, w + (r0 - w) * e
+    mid = yaw + 0.5 * r * dt
+    x += (u * math.cos(mid) - s * math.sin(mid)) * dt
+    y += (u * math.sin(mid) + s * math.cos(mid)) * dt
+    yaw += r * dt
+  return x, y, yaw
+
+
+@pytest.mark.parametrize("v,w,measured,tau", [(0.8, 0.5, (0.2, -0.3, -1.5), 0.25), (0.0, 0.0, (0.0, 0.4, 0.0), 0.1),
+                                              (1.0, -0.7, (1.0, 0.0, -0.7), 0.5), (0.5, 1.0, (0.9, 0.1, 0.0), 1.0)])
+def test_relaxed_poses_match_integrated_motion(v, w, measured, tau):
+  times = np.array([0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5], np.float32)
+  got = np.asarray(relaxed_poses(jnp.float32(v), jnp.float32(w), jnp.asarray(measured, jnp.float32), tau,
+                                 jnp.asarray(times)))
+  for t, pose in zip(times, got):
+    assert pose == pytest.approx(_euler_relaxed_pose(v, w, measured, tau, float(t)), abs=2e-4)
+  if measured == (v, 0.0, w):  # already moving as commanded: the unicycle
+    assert got == pytest.approx(np.asarray(unicycle_poses(jnp.float32(v), jnp.float32(w), jnp.asarray(times))), abs=2e-4)
+  if v == w == 0.0:  # a slide dying away: y(t) = s0 tau (1 - e^(-t / tau)), by hand
+    assert got[:, 1] == pytest.approx(measured[1] * tau * (1 - np.exp(-times / tau)), abs=1e-5)
+
+
+def test_chassis_velocity_is_read_in_the_chassis_frame():
+  """A chassis yawed 90 degrees left (its x axis along world +y) moving along world +y drives forward;
+  along world +x it slides to its right (-y)."""
+  rot = jnp.asarray([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # columns: the chassis's axes in world
+  assert np.asarray(chassis_velocity(rot, jnp.asarray([0.0, 0.7, 0.0, 0, 0, 0]))) == pytest.approx([0.7, 0.0, 0.0])
+  assert np.asarray(chassis_velocity(rot, jnp.asarray([0.3, 0.0, 0.0, 0, 0, 0]))) == pytest.approx([0.0, -0.3, 0.0])
 
 
 def _segment_distance(p, a, b):
@@ -61,8 +100,9 @@ def test_footprint_distance_matches_edge_distances():
   assert (np.asarray(got) < 0).any() and (np.asarray(got) > 0).any()  # both sides of the edges were sampled
 
 
-def _filter(rays=8, horizon=0.5, samples=10, margin=0.05):
-  return SafetyFilter(ScanLayout(rays, 5.0, (0.0, 0.0, 0.2), (0.0,)), HALF, horizon, samples, margin, 1.0, 1.0)
+def _filter(rays=8, horizon=0.5, samples=10, margin=0.05, response=0.0, reverse=0.0):
+  return SafetyFilter(ScanLayout(rays, 5.0, (0.0, 0.0, 0.2), (0.0,)), HALF, horizon, samples, margin, 1.0, 1.0,
+                      response, reverse)
 
 
 def _ranges(f, hits: dict[int, float]):
@@ -168,6 +208,30 @@ def test_alongside_a_wall_inside_the_margin_it_keeps_a_parallel_course_and_stops
   for w in (0.0, 1.0, -1.0):
     got = tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(w), ranges)))
     assert got == (1.0, 0.0, float(w != 0.0)), w
+
+
+def test_a_robot_moving_faster_than_its_command_is_slowed_sooner():
+  """A wall point 1.05 m ahead (clearance 0.545 m at rest, margin 0.05), command 0.5 m/s straight.
+  As a unicycle the robot travels 0.25 m in the 0.5 s: kept. Measured at 2 m/s forward (pushed, or
+  the belts still slowing) with tau = 0.25 s, a v travels 0.5 a v + (2 - a v) D, D = tau (1 - e^-2) =
+  0.2162 s: clearance 0.1126 - 0.2838 a v >= 0.05 keeps a v <= 0.2206: of 0.5 x SCALES, 0.125 m/s."""
+  ranges = _ranges(_filter(), {0: 1.05})
+  measured = jnp.asarray([2.0, 0.0, 0.0])
+  assert tuple(map(float, _filter().choose(jnp.float32(0.5), jnp.float32(0.0), ranges, measured))) == (0.5, 0.0, 0.0)
+  v, w, changed = _filter(response=0.25).choose(jnp.float32(0.5), jnp.float32(0.0), ranges, measured)
+  assert (float(v), float(w), bool(changed)) == (0.125, 0.0, True)
+
+
+def test_a_held_robot_backs_away_with_the_commanded_turn():
+  """A hit 0.45 m ahead, inside the front edge: the filter stops the command (test above). With a
+  reverse speed of 0.3 m/s it backs up turning as the policy asked (backing 0.15 m while turning
+  0.25 rad takes the hit further from the front edge throughout); a second hit 0.52 m behind (0.015 m
+  outside the rear edge) refuses backing at any turn: it stands. A robot asked to stand is not moved."""
+  f = _filter(reverse=0.3)
+  assert tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(0.5), _ranges(f, {0: 0.45})))) == pytest.approx((-0.3, 0.5, 1.0))
+  assert tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(0.5), _ranges(f, {0: 0.45, 4: 0.52})))) == (0.0, 0.0, 1.0)
+  assert tuple(map(float, f.choose(jnp.float32(0.0), jnp.float32(0.0), _ranges(f, {0: 0.45})))) == (0.0, 0.0, 0.0)
+  assert tuple(map(float, f.choose(jnp.float32(0.5), jnp.float32(0.0), _ranges(f, {0: 1.05})))) == (0.5, 0.0, 0.0)  # not held
 
 
 def test_config_refuses_the_filter_where_nothing_is_a_wall():

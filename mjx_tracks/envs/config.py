@@ -136,6 +136,8 @@ class SafetyFilterConfig:
   horizon: float = dataclasses.field(metadata=bound(0.05, 5.0))  # s, how long each command is predicted held
   samples: int = dataclasses.field(metadata=bound(1, 50))  # predicted poses, evenly in (0, horizon]
   margin: float = dataclasses.field(metadata=bound(0.0, 1.0))  # m, the least clearance a kept command keeps
+  response: float = dataclasses.field(metadata=bound(0.0, 2.0))  # s, the predicted motion's approach from the measured one (0: none)
+  reverse: float = dataclasses.field(metadata=bound(0.0, 2.0))  # m/s, backing speed of a held robot (0: it stands)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -634,6 +636,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("control", "dof_curriculum"): [],  # before the DOF curriculum: every dimension acts
               ("control", "start_pose"): [],  # before start poses: every joint at 0
               ("control", "safety_filter"): FROM_DEFAULTS,  # before the safety filter: none (enabled: false)
+              ("control", "safety_filter", "response"): 0.0,  # (after the line above) before it: the unicycle
+              ("control", "safety_filter", "reverse"): 0.0,  # before it: a held robot stands
               ("scene", "terrains"): [],  # before terrain tasks: none
               ("scene", "nav_floor_obstacles"): 0,  # before floor obstacles: none
               ("scene", "nav_floor_height"): FROM_DEFAULTS,

@@ -11,7 +11,12 @@ belts:
    gives none.
 2. Predict: a command (v m/s, w rad/s) held for `horizon` s moves the chassis as a unicycle:
    yaw(t) = w t, x(t) = v sin(w t) / w, y(t) = v (1 - cos(w t)) / w (x = v t where w = 0), taken at
-   `samples` times evenly spaced in (0, horizon].
+   `samples` times evenly spaced in (0, horizon]. With a `response` time tau > 0 s, the motion
+   starts instead from the chassis's measured velocity (forward u0, sideways s0 m/s, yaw rate r0
+   rad/s, in its own frame: what odometry and an IMU give a real robot) and approaches the command's
+   as e^(-t / tau): body velocity (v + (u0 - v) e, s0 e, w + (r0 - w) e), e = e^(-t / tau),
+   integrated in the plane (relaxed_poses). It sees a robot already turning or sliding (a floor
+   obstacle pushing it, the lag of the belts) keep doing so for a while.
 3. Clearance: the least signed distance (m) of a point from the robot's footprint at those poses
    (negative inside it: minus the depth to its nearest edge). The footprint is the rectangle of half-sizes `half` round the chassis origin that holds every
    colliding geom at rest (mjx_tracks.sim.collisions.footprint_half: flippers in line, their longest
@@ -21,9 +26,14 @@ belts:
    already nearer than that (clearance standing still: now, negative where a hit lies inside the
    footprint), at least now: it never brings the robot nearer than margin, nor nearer than it is.
    Standing still always qualifies (for finite ranges); the command itself, where it qualifies, is
-   kept; of equally near candidates, the one with the larger v.
-Joint targets pass unchanged. The filter only scales v and w towards 0, never raising or reversing
-them; scaling them unequally changes the path's curvature.
+   kept; of equally near candidates, the one with the larger v. (With a response time, "standing
+   still" is stopping: its clearance is the robot's as it coasts to a halt.)
+5. Back off (`reverse` > 0 m/s): where step 4 stops a robot the policy asked to move, the filter
+   backs it up instead at -reverse m/s with the command's turn, its w scaled by the largest of SCALES
+   that qualifies as in step 4 (w's sign unchanged: backing, the chassis turns the way the policy
+   asked); where none does, it stands still. A held robot leaves the wall rather than wait there.
+Joint targets pass unchanged. Without `reverse` the filter only scales v and w towards 0, never
+raising or reversing them; scaling them unequally changes the path's curvature.
 """
 
 from __future__ import annotations
@@ -52,6 +62,23 @@ def unicycle_poses(v: jax.Array, w: jax.Array, times: jax.Array) -> jax.Array:
   return jnp.stack([v * times * along, v * times * across, u], axis=-1)
 
 
+def relaxed_poses(v: jax.Array, w: jax.Array, measured: jax.Array, response: float, times: jax.Array,
+                  fine: int = 8) -> jax.Array:
+  """(len(times), 3) chassis poses (x m, y m, yaw rad) from the origin facing +x, with body velocity
+  (v + (u0 - v) e, s0 e, w + (r0 - w) e), e = e^(-t / response) (module docstring, step 2), measured =
+  (u0 m/s, s0 m/s, r0 rad/s). Yaw in closed form; the position by the midpoint rule, `fine` steps
+  per interval between times (times evenly spaced from 0: times[k] = (k + 1) times[0])."""
+  dt = times[0] / fine
+  t = dt * (jnp.arange(len(times) * fine, dtype=jnp.float32) + 0.5)  # midpoints, s
+  decay = lambda t: response * (1.0 - jnp.exp(-t / response))  # s, the integral of e over [0, t]
+  yaw = lambda t: w * t + (measured[2] - w) * decay(t)
+  e = jnp.exp(-t / response)
+  u, s, th = v + (measured[0] - v) * e, measured[1] * e, yaw(t)
+  x = jnp.cumsum((u * jnp.cos(th) - s * jnp.sin(th)) * dt)[fine - 1::fine]
+  y = jnp.cumsum((u * jnp.sin(th) + s * jnp.cos(th)) * dt)[fine - 1::fine]
+  return jnp.stack([x, y, yaw(times)], axis=-1)
+
+
 def footprint_distance(points: jax.Array, pose: jax.Array, half: jax.Array) -> jax.Array:
   """(N,) m: each point's (N, 2) signed distance from the rectangle of half-sizes half (2,) at pose
   (x, y, yaw): outside, the distance to it; inside, minus the distance to its nearest edge."""
@@ -73,6 +100,8 @@ class SafetyFilter:
   margin: float  # m
   v_scale: float  # m/s, |dv| of a full-range change (the robot's top speed)
   w_scale: float  # rad/s, |dw| of a full-range change (its top yaw rate)
+  response: float = 0.0  # s, tau of step 2 (0: the command from the start, the unicycle)
+  reverse: float = 0.0  # m/s, step 5's backing speed (0: never backs up)
 
   def points(self, ranges: jax.Array) -> tuple[jax.Array, jax.Array]:
     """((N, 2) m scan hits in the chassis frame, (N,) bool: a hit within range) of the ring's ranges (m)."""
@@ -80,22 +109,41 @@ class SafetyFilter:
     pts = jnp.asarray(self.scan.mount[:2], jnp.float32) + ranges[:, None] * jnp.asarray(d)
     return pts, ranges < self.scan.max_range
 
-  def clearance(self, points: jax.Array, hit: jax.Array, v: jax.Array, w: jax.Array) -> jax.Array:
-    """() m: the least signed distance of a hit from the footprint while (v, w) is held (steps 2-3)."""
+  def poses(self, v: jax.Array, w: jax.Array, measured: jax.Array | None, times: jax.Array) -> jax.Array:
+    """(len(times), 3) predicted chassis poses (x m, y m, yaw rad) under (v, w) (step 2; times evenly
+    spaced from 0 where there is a response time)."""
+    return unicycle_poses(v, w, times) if self.response == 0.0 else relaxed_poses(v, w, measured, self.response, times)
+
+  def clearance(self, points: jax.Array, hit: jax.Array, v: jax.Array, w: jax.Array,
+                measured: jax.Array | None = None) -> jax.Array:
+    """() m: the least signed distance of a hit from the footprint while (v, w) is held (steps 2-3);
+    measured: the chassis's (u0 m/s, s0 m/s, r0 rad/s), read only with a response time."""
     times = self.horizon * jnp.arange(1, self.samples + 1, dtype=jnp.float32) / self.samples
-    poses = unicycle_poses(v, w, times)
+    poses = self.poses(v, w, measured, times)
     half = jnp.asarray(self.half, jnp.float32)
     dist = jax.vmap(lambda p: footprint_distance(points, p, half))(poses)  # (samples, N)
     return jnp.min(jnp.where(hit[None], dist, FAR))
 
-  def choose(self, v: jax.Array, w: jax.Array, ranges: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """(v m/s, w rad/s, whether the command changed) for the command (v, w) and the ring's ranges (step 4)."""
+  def choose(self, v: jax.Array, w: jax.Array, ranges: jax.Array,
+             measured: jax.Array | None = None) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """(v m/s, w rad/s, whether the command changed) for the command (v, w), the ring's ranges (m)
+    and the chassis's measured (u0 m/s, s0 m/s, r0 rad/s) (steps 4-5; measured: read only with a
+    response time)."""
     points, hit = self.points(ranges)
+    clear_of = jax.vmap(lambda x, y: self.clearance(points, hit, x, y, measured))
     a, b = (x.ravel() for x in jnp.meshgrid(jnp.asarray(SCALES), jnp.asarray(SCALES), indexing="ij"))
     cv, cw = a * v, b * w  # candidates; SCALES[0] == 1: the first is the command itself, the last standing still
-    clear = jax.vmap(lambda x, y: self.clearance(points, hit, x, y))(cv, cw)
-    now = clear[-1]  # standing still: the clearance where the robot is
+    clear = clear_of(cv, cw)
+    now = clear[-1]  # standing still (stopping): the clearance it keeps
     cost = jnp.abs(cv - v) / self.v_scale + jnp.abs(cw - w) / self.w_scale
-    ok = clear >= jnp.minimum(self.margin, now) - ROUNDING
-    pick = jnp.argmin(jnp.where(ok, cost, jnp.inf))  # the last candidate, standing still, is ok for finite ranges
-    return cv[pick], cw[pick], cost[pick] > 0
+    floor = jnp.minimum(self.margin, now) - ROUNDING
+    pick = jnp.argmin(jnp.where(clear >= floor, cost, jnp.inf))  # the last candidate, standing still, is ok for finite ranges
+    v_out, w_out = cv[pick], cw[pick]
+    if self.reverse > 0.0:  # step 5
+      held = (pick == len(cv) - 1) & ((v != 0.0) | (w != 0.0))
+      bv, bw = jnp.full(len(SCALES), -self.reverse, jnp.float32), jnp.asarray(SCALES) * w
+      back_ok = clear_of(bv, bw) >= floor
+      first = jnp.argmax(back_ok)  # the largest turn that qualifies (SCALES descending)
+      backs = held & back_ok[first]
+      v_out, w_out = jnp.where(backs, bv[first], v_out), jnp.where(backs, bw[first], w_out)
+    return v_out, w_out, (v_out != v) | (w_out != w)

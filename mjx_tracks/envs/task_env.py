@@ -27,7 +27,7 @@ from mjx_tracks.sim import mjx_private
 from mjx_tracks.sim.collisions import CollisionWatch, footprint_half
 from mjx_tracks.sim.control import Controller
 from mjx_tracks.sim.layout import BELT_SIDE
-from mjx_tracks.sim.pose import chassis_rpy
+from mjx_tracks.sim.pose import chassis_rpy, chassis_velocity
 from mjx_tracks.sim.simulator import Simulator, runs_late_command
 from scenes.curriculum import Curriculum
 from scenes.navigation import NavScene
@@ -91,7 +91,7 @@ class TrackedRobotEnv(Env):
                            tuple(o.scan_pitches))
     f = cfg.control.safety_filter
     self.safety = (SafetyFilter(ScanLayout(f.rays, o.scan_range, self.robot.lidar_pos, (0.0,)), self.footprint, f.horizon,
-                                f.samples, f.margin, self.robot.max_speed, self.robot.max_yaw_rate)
+                                f.samples, f.margin, self.robot.max_speed, self.robot.max_yaw_rate, f.response, f.reverse)
                    if f.enabled else None)  # None: commands go to the belts as the policy gives them
     self.rand = cfg.randomization
     self.randomized = cfg.randomization.enabled or every_path  # the state carries a RobustState
@@ -221,13 +221,21 @@ class TrackedRobotEnv(Env):
   def _safe_command(self, m: mjx.Model, es: EnvState, v: jax.Array, w: jax.Array):
     """(v m/s, w rad/s, whether the safety filter changed them): the command the belts get
     (mjx_tracks.envs.safety_filter), its ring read from the state the step starts from, with the
-    episode's scan noise."""
+    episode's scan noise, and the chassis's velocity there (forward, sideways m/s, yaw rate rad/s in
+    its own frame, as a state estimator would give it: the IMU noise of randomization not added)."""
     if self.safety is None:
       return v, w, jnp.bool_(False)
+    return self.safety.choose(v, w, *self.safety_inputs(m, es))
+
+  def safety_inputs(self, m: mjx.Model, es: EnvState) -> tuple[jax.Array, jax.Array]:
+    """What the safety filter reads in state es: its ring's ranges (m) and the chassis's measured
+    (forward m/s, sideways m/s, yaw rate rad/s) (_safe_command)."""
     p = None if es.robust is None else es.robust.perturbation
-    ranges = scan_ranges(self.safety.scan, m, es.data, self.sim.layout.chassis_body, jax.random.fold_in(es.key, 13),
+    d, body = es.data, self.sim.layout.chassis_body
+    ranges = scan_ranges(self.safety.scan, m, d, body, jax.random.fold_in(es.key, 13),
                          None if p is None else p.depth_noise, None if p is None else p.hidden)
-    return self.safety.choose(v, w, ranges)
+    velocity = chassis_velocity(d.xmat[body], d.qvel)  # m/s
+    return ranges, jnp.stack([velocity[0], velocity[1], d.qvel[5]])  # qvel[5]: the yaw rate, chassis frame
 
   def _start(self, scene: SceneState, key: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """The robot's start: the scene's spawn (ground point, yaw) and joints at control.start_pose (0
@@ -290,7 +298,7 @@ class TrackedRobotEnv(Env):
     ranges = (scan_ranges(self.scan, m, d, self.sim.layout.chassis_body, jax.random.fold_in(key, 5),
                    real.get("range_noise"), real.get("hidden")) if self.scan.size else jnp.zeros(0))
     rot = d.xmat[self.sim.layout.chassis_body]
-    rpy, rate, velocity, joints = chassis_rpy(d.qpos), d.qvel[3:6], rot.T @ d.qvel[0:3], d.qpos[self.sim.layout.joint_qpos]
+    rpy, rate, velocity, joints = chassis_rpy(d.qpos), d.qvel[3:6], chassis_velocity(rot, d.qvel), d.qpos[self.sim.layout.joint_qpos]
     if r is not None:  # what the robot's sensors read
       rpy, rate, velocity, joints = rnd.noisy_imu_and_joints(r.perturbation, rpy, rate, velocity, joints,
                                                              jax.random.fold_in(key, 3))

@@ -25,6 +25,12 @@ def chassis_rpy(qpos: jax.Array) -> jax.Array:
   return quat_to_rpy(qpos[..., 3:7])
 
 
+def chassis_velocity(rot: jax.Array, qvel: jax.Array) -> jax.Array:
+  """(3,) m/s: the chassis's linear velocity in its own frame (x forward, y left, z up), from its
+  rotation matrix (3, 3: d.xmat of its body) and qvel (the free joint's first three: world frame)."""
+  return rot.T @ qvel[0:3]
+
+
 def tipped_over(rpy: jax.Array) -> jax.Array:
   """True when |roll| or |pitch| exceeds pi/2 (the reference's tip-over rule)."""
   return (jnp.abs(rpy[..., 0]) > jnp.pi / 2) | (jnp.abs(rpy[..., 1]) > jnp.pi / 2)

@@ -5,8 +5,10 @@ navigation area again (train.evaluate's trials: the area's draw, reset keys from
 EVAL_EPS, the exported policy, deterministic). At each of the last steps before the trial's first
 collision it lists the policy's command (v m/s, w rad/s), the filter's (mjx_tracks.envs.safety_filter),
 the footprint's clearance from the scan's hits and from the walls themselves (scenes.clearance), and
-the chassis' motion over the step in its own frame (dx, dy m, dyaw rad) as the filter predicted it
-(its command held for one control period as a unicycle) and as it was. Where the two motions part,
+the chassis' measured velocity (forward, sideways m/s, yaw rate rad/s: the filter's other input), and
+its motion over the step in its own frame (dx, dy m, dyaw rad) as the filter predicted it (its
+command held for one control period: a unicycle, or with the run's response time from the measured
+velocity) and as it was. Where the two motions part,
 the filter's prediction, not its sensing, let the collision through. Prints the rows and writes
 JSON with the device, command and date. CPU: about 3 minutes per call.
 
@@ -25,15 +27,14 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 from mjx_tracks import atomic, compile_cache  # noqa: E402
-from mjx_tracks.envs.safety_filter import unicycle_poses  # noqa: E402
-from mjx_tracks.envs.scan import scan_ranges  # noqa: E402
 from mjx_tracks.sim.pose import chassis_rpy  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from train.core.run_record import run_config  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_env, trial_keys, trial_starts  # noqa: E402
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
 
-COLUMNS = ("v", "w", "filtered_v", "filtered_w", "scan_clearance", "wall_clearance", "x", "y", "yaw")
+COLUMNS = ("v", "w", "filtered_v", "filtered_w", "scan_clearance", "wall_clearance", "x", "y", "yaw",
+           "forward", "sideways", "yaw_rate")
 
 
 def step_view(core, s, action) -> jax.Array:
@@ -41,16 +42,16 @@ def step_view(core, s, action) -> jax.Array:
   es, f = s.pipeline_state, core.safety
   m = core._model(es.scene, es.robust)
   v, w, _ = core.controller.decode(action, es.targets, s.info["eps"])
-  ranges = scan_ranges(f.scan, m, es.data, core.sim.layout.chassis_body)
+  ranges, measured = core.safety_inputs(m, es)
   points, hit = f.points(ranges)
-  v2, w2, _ = f.choose(v, w, ranges)
+  v2, w2, _ = f.choose(v, w, ranges, measured)
   pos, yaw = es.data.xpos[core.sim.layout.chassis_body], chassis_rpy(es.data.qpos)[2]
   walls = core.kind.clearance(core.scene, es.scene, pos, yaw, jnp.asarray(f.half, jnp.float32))
-  return jnp.stack([v, w, v2, w2, f.clearance(points, hit, 0.0, 0.0), walls, pos[0], pos[1], yaw])
+  return jnp.stack([v, w, v2, w2, f.clearance(points, hit, 0.0, 0.0, measured), walls, pos[0], pos[1], yaw, *measured])
 
 
-def trace(run_dir: str, area: str, trials: list[int], of: int) -> tuple[np.ndarray, np.ndarray, float]:
-  """(views (steps, trials, COLUMNS), collided (steps, trials), control period s) of the trials
+def trace(run_dir: str, area: str, trials: list[int], of: int):
+  """(views (steps, trials, COLUMNS), collided (steps, trials), control period s, the run's filter) of the trials
   (indices into an evaluation of `of` trials: its keys depend on how many it drew)."""
   cfg = run_config(run_dir)
   if not cfg.control.safety_filter.enabled or cfg.randomization.enabled:
@@ -66,17 +67,18 @@ def trace(run_dir: str, area: str, trials: list[int], of: int) -> tuple[np.ndarr
     n = jax.vmap(core.step)(s, a)
     return n, (view, n.pipeline_state.collided)
   views, collided = jax.jit(lambda s: jax.lax.scan(body, s, None, length=cfg.episode.max_steps)[1])(start)
-  return np.asarray(views), np.asarray(collided), cfg.control.period
+  return np.asarray(views), np.asarray(collided), cfg.control.period, core.safety
 
 
-def motion(views: np.ndarray, j: int, period: float) -> tuple[list[float], list[float]]:
-  """(predicted, actual) motion (dx, dy, dyaw) over step j in the chassis frame at its start."""
+def motion(f, views: np.ndarray, j: int, period: float) -> tuple[list[float], list[float]]:
+  """(predicted by the filter f, actual) motion (dx, dy, dyaw) over step j in the chassis frame at its start."""
   v = dict(zip(COLUMNS, views[j]))
   nxt = dict(zip(COLUMNS, views[j + 1]))
   c, s = np.cos(v["yaw"]), np.sin(v["yaw"])
   dx, dy = nxt["x"] - v["x"], nxt["y"] - v["y"]
   actual = [c * dx + s * dy, -s * dx + c * dy, (nxt["yaw"] - v["yaw"] + np.pi) % (2 * np.pi) - np.pi]
-  predicted = np.asarray(unicycle_poses(jnp.float32(v["filtered_v"]), jnp.float32(v["filtered_w"]), jnp.array([period])))[0]
+  measured = jnp.asarray([v["forward"], v["sideways"], v["yaw_rate"]], jnp.float32)
+  predicted = np.asarray(f.poses(jnp.float32(v["filtered_v"]), jnp.float32(v["filtered_w"]), measured, jnp.array([period])))[0]
   return [round(float(x), 3) for x in predicted], [round(float(x), 3) for x in actual]
 
 
@@ -93,14 +95,14 @@ def main(argv: list[str] | None = None) -> int:
   trials = [int(t) for t in args.trials.split(",")]
   if not all(0 <= t < args.of for t in trials):
     p.error(f"--trials: indices from 0 to {args.of - 1}")
-  views, collided, period = trace(args.run_dir, args.area, trials, args.of)
+  views, collided, period, f = trace(args.run_dir, args.area, trials, args.of)
   out = []
   for k, trial in enumerate(trials):
     hits = np.flatnonzero(collided[:, k])
     rows = []
     for j in range(max(0, int(hits[0]) - args.steps + 1), int(hits[0]) + 1) if hits.size else ():
-      predicted, actual = motion(views[:, k], j, period)
-      rows.append({"step": j, **{c: round(float(x), 3) for c, x in zip(COLUMNS[:6], views[j, k])},
+      predicted, actual = motion(f, views[:, k], j, period)
+      rows.append({"step": j, **{c: round(float(x), 3) for c, x in zip(COLUMNS, views[j, k]) if c not in ("x", "y", "yaw")},
                    "predicted_motion": predicted, "actual_motion": actual})
       print(trial, rows[-1], flush=True)
     out.append({"trial": trial, "first_collision_step": int(hits[0]) if hits.size else None, "steps": rows})
