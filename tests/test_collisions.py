@@ -56,7 +56,7 @@ def _watched():
   def flag(q, p, s):
     m = env.sim.with_boxes(p, s)
     d = mjx.forward(m, mjx.make_data(m, impl="jax").replace(qpos=q))
-    return env.watch.touching(d), env.watch.colliding(d), mjx_private.contacts(d).geom
+    return env.watch.touching(d), env.watch.colliding(d), mjx_private.contacts(d).geom, env.watch.riding(d)
 
   return env, jax.jit(jax.vmap(flag))
 
@@ -71,8 +71,9 @@ def test_collision_flag_matches_the_c_engine_contacts_and_the_rule():
     qpos.append(np.asarray(sim.init_data(jnp.array([6.0, y, 0.0]), jnp.float32(0.0)).qpos))
   pos = jnp.array([[b[0] for b in boxes] for _, _, boxes, _ in cases])
   size = jnp.array([[b[1] for b in boxes] for _, _, boxes, _ in cases])
-  got, which, geoms = map(np.asarray, flags(jnp.asarray(np.stack(qpos)), pos, size))
-  for (name, expected, boxes, _), q, g, w, pairs in zip(cases, qpos, got, which, geoms):
+  got, which, geoms, riding = map(np.asarray, flags(jnp.asarray(np.stack(qpos)), pos, size))
+  assert [name for (name, *_), r in zip(cases, riding) if r] == ["floor obstacle under the left track"]
+  for (name, expected, boxes, _), q, g, w, pairs, r in zip(cases, qpos, got, which, geoms, riding):
     m = sim.c_model_with_boxes(np.array([b[0] for b in boxes]), np.array([b[1] for b in boxes]))
     d = mujoco.MjData(m)
     d.qpos[:] = q
@@ -80,6 +81,9 @@ def test_collision_flag_matches_the_c_engine_contacts_and_the_rule():
     oracle = _c_collisions(watch, m, d)
     assert bool(g) == bool(oracle) == expected, name
     assert {tuple(sorted(map(int, p))) for p in pairs[w]} == oracle, name  # the same geom pairs
+    on_belts = any(c.dist - c.includemargin < 0 and any(watch.belts_only[a] and watch.belt[b] for a, b in
+                                                       ((c.geom1, c.geom2), (c.geom2, c.geom1))) for c in d.contact[:d.ncon])
+    assert bool(r) == on_belts, name  # riding: a belt on a floor obstacle, as the C engine's contacts say
 
 
 def test_stair_and_terrain_worlds_watch_nothing():

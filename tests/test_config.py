@@ -149,6 +149,12 @@ def test_nav_suites_evaluate_each_area_kind_alone():
     scene_config(load_config("nav", ["scene.nav_kinds=[zigzag]"]), "nav/hallway")
   with pytest.raises(ConfigError, match=r"nav/KIND is not for stair tasks"):
     scene_config(load_config("asc-inc-cog"), "nav/hallway")
+  bare = "evaluation.held_out_nav=[{name: bare-zigzag, gap: [1.0, 2.0], floor_obstacles: 0, length: 12.0, areas: [zigzag]}]"
+  s = scene_config(load_config("nav-obstacles", [bare]), "held-out/bare-zigzag").scene  # one area kind, no floor boxes
+  assert (s.nav_kinds, s.nav_floor_obstacles) == (("zigzag",), 0)
+  assert scene_config(load_config("nav-obstacles"), "held-out/narrow-gap").scene.nav_kinds == ("hallway", "zigzag")
+  with pytest.raises(ConfigError, match=r"must be of the task's \['zigzag'\]"):
+    scene_config(load_config("nav", ["scene.nav_kinds=[zigzag]", bare.replace("[zigzag]", "[hallway]")]), "held-out/bare-zigzag")
 
 
 def test_held_out_scenes_pin_their_staircase_and_bad_ones_are_named():

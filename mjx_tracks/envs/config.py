@@ -388,6 +388,7 @@ class HeldOutNav:
   gap: tuple[float, float]  # m, C ~ U(min, max) (SceneConfig.nav_gap)
   floor_obstacles: int = dataclasses.field(metadata=bound(0, MAX_FLOOR_OBSTACLES))
   length: float = dataclasses.field(metadata=bound(*NAV_LENGTH_LIMITS))  # m, the area's length (SceneConfig.nav_length)
+  areas: tuple[str, ...] = ()  # area kinds drawn, of the task's (SceneConfig.nav_kinds); (): the task's
 
   def validate(self, key: str) -> None:
     require_plain_name(self.name, f"{key}.name")
@@ -668,7 +669,8 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
 
 
 # keys added to the entries of a list -> the value each older entry had
-ADDED_ENTRY_KEYS = {("evaluation", "held_out_nav", "length"): 12.0}  # before longer areas: 12 m, as trained
+ADDED_ENTRY_KEYS = {("evaluation", "held_out_nav", "length"): 12.0,  # before longer areas: 12 m, as trained
+                    ("evaluation", "held_out_nav", "areas"): []}  # before the key: the task's area kinds
 
 
 def _with_added_keys(raw: dict) -> dict:

@@ -67,6 +67,16 @@ class CollisionWatch:
     return penetrating & (hits(g1, g2) | hits(g2, g1))
 
 
+  def riding(self, d) -> jax.Array:
+    """() bool: whether a belt touches a `belts_only` geom (a floor obstacle under the tracks) in the
+    contacts of the step just taken."""
+    c = mjx_private.contacts(d)
+    g1, g2 = c.geom[:, 0], c.geom[:, 1]
+    belt, belts_only = jnp.asarray(self.belt), jnp.asarray(self.belts_only)
+    pair = (belts_only[g1] & belt[g2]) | (belts_only[g2] & belt[g1])
+    return jnp.any(pair & (c.dist - c.includemargin < 0))
+
+
 def robot_at_rest(m: mujoco.MjModel) -> tuple[mujoco.MjData, np.ndarray]:
   """The model's data at qpos0 (mj_forward: level, at rest) and the ids of the robot's colliding
   geoms (a body other than the world, a contype or conaffinity bit)."""

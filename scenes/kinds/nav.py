@@ -65,8 +65,11 @@ class Nav(SceneKind):
       h = held.get(scene[len(HELD_OUT):])
       if h is None:
         raise ConfigError(f"scene {scene!r}: the task's held-out areas (evaluation.held_out_nav) are {list(held)}")
+      if not set(h.areas) <= set(cfg.scene.nav_kinds):
+        raise ConfigError(f"scene {scene!r}: its areas {list(h.areas)} must be of the task's {list(cfg.scene.nav_kinds)}")
       return longer_episode(replace_scene(cfg, nav_gap=tuple(h.gap), nav_floor_obstacles=h.floor_obstacles,
-                                          nav_length=h.length), h.length / cfg.scene.nav_length)
+                                          nav_length=h.length, nav_kinds=tuple(h.areas) or cfg.scene.nav_kinds),
+                            h.length / cfg.scene.nav_length)
     if scene == "hardest" or scene.startswith(HARDEST):
       raise ConfigError(f"scene {scene!r}: navigation tasks have no hardest configuration; "
                         f"use uniform, {NAV}AREA or {HELD_OUT}NAME")

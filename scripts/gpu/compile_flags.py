@@ -6,7 +6,8 @@ its own empty compilation cache (MJX_TRACKS_CACHE) and MJX_TRACKS_COMPILE_LOG, t
 program's compilation and 100 trials). Writes OUT/compile-flags.json: per variant the run's
 "compiled in N s", its steady training steps/s (median of its [train] lines after the first), the
 ten longest XLA compilations, the evaluation's wall s; with the device, command and date.
-Usage (GPU host): python scripts/gpu/compile_flags.py OUT [--task asc-inc-cog] [--steps 600000]"""
+Usage (GPU host): python scripts/gpu/compile_flags.py OUT [--task asc-inc-cog] [--steps 600000]
+    [--variants NAME,...] [--skip-eval]"""
 
 from __future__ import annotations
 
@@ -29,6 +30,10 @@ VARIANTS = {  # name -> XLA_FLAGS added to the environment's
     # XLA's compilation on 16 threads (jaxlib 0.11 refuses --xla_gpu_enable_llvm_module_compilation_parallelism)
     "force-16": "--xla_gpu_force_compilation_parallelism=16",
     "autotune-0-force-16": "--xla_gpu_autotune_level=0 --xla_gpu_force_compilation_parallelism=16",
+    # cheaper code generation on 16 threads: LLVM without its expensive passes; LLVM at -O1; ptxas without optimization
+    "cheap-llvm-force-16": "--xla_llvm_disable_expensive_passes=true --xla_gpu_force_compilation_parallelism=16",
+    "llvm-o1-force-16": "--xla_backend_optimization_level=1 --xla_gpu_force_compilation_parallelism=16",
+    "ptxas-o0-force-16": "--xla_gpu_disable_gpuasm_optimizations=true --xla_gpu_force_compilation_parallelism=16",
 }
 
 
@@ -55,15 +60,24 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
   wall = time.time() - t0
   compiled = re.search(r"compiled in ([0-9,]+) s", out)
   rates = [float(x.replace(",", "")) for x in re.findall(r"^\[train\].*?([0-9,]+) steps/s", out, re.M)]
+  if args.skip_eval:
+    ev, eval_wall, success = None, None, None
+  else:
+    ev, eval_wall, success = _evaluate(run, env, work, name)
+  return {"xla_flags": flags, "compile_s": float(compiled.group(1).replace(",", "")) if compiled else None,
+          "train_steps_per_s": statistics.median(rates[1:]) if len(rates) > 1 else None, "run_wall_s": round(wall, 1),
+          "eval_wall_s": eval_wall, "eval_rc": None if ev is None else ev.returncode, "hardest_success": success,
+          "longest_compilations": _longest(env["MJX_TRACKS_COMPILE_LOG"]), "log_tail": out[-600:]}
+
+
+def _evaluate(run: str, env: dict, work: str, name: str):
+  """(the process, its wall s, hardest-staircase success or None) of evaluating the variant's run."""
   t0 = time.time()
   ev = subprocess.run([sys.executable, "-m", "train.evaluate", run, "--scene", "hardest", "--trials", "100",
                        "--out", f"{work}/{name}-eval.json"], env=env, capture_output=True, text=True)
-  eval_wall = time.time() - t0
+  eval_wall = round(time.time() - t0, 1)
   success = json.load(open(f"{work}/{name}-eval.json"))["metrics"]["success"]["mean"] if ev.returncode == 0 else None
-  return {"xla_flags": flags, "compile_s": float(compiled.group(1).replace(",", "")) if compiled else None,
-          "train_steps_per_s": statistics.median(rates[1:]) if len(rates) > 1 else None, "run_wall_s": round(wall, 1),
-          "eval_wall_s": round(eval_wall, 1), "eval_rc": ev.returncode, "hardest_success": success,
-          "longest_compilations": _longest(env["MJX_TRACKS_COMPILE_LOG"]), "log_tail": out[-600:]}
+  return ev, eval_wall, success
 
 
 def main() -> None:
@@ -72,6 +86,7 @@ def main() -> None:
   p.add_argument("--task", default="asc-inc-cog")
   p.add_argument("--steps", type=int, default=600_000)
   p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of " + ", ".join(VARIANTS))
+  p.add_argument("--skip-eval", action="store_true", help="no evaluation after each run (compile and training only)")
   args = p.parse_args()
   import jax  # noqa: PLC0415
   device = f"{jax.devices()[0].device_kind} x {jax.device_count()}, JAX {jax.__version__}"
