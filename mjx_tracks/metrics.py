@@ -23,7 +23,7 @@ class Metric:
   integer: bool = False  # stored as an integer (a flag or a count)
 
 
-REWARD_TERMS = ("progress", "safety", "tipover", "goal", "collision", "clearance")  # the reward's named terms (mjx_tracks.envs.rewards)
+REWARD_TERMS = ("progress", "safety", "tipover", "goal", "collision", "clearance", "riding")  # the reward's named terms (mjx_tracks.envs.rewards)
 
 # per control step: the env's state.metrics, in this order; summed over an episode by Brax's
 # episode wrapper and by evaluation (EPISODE figures are made from those sums)

@@ -116,3 +116,17 @@ def test_the_env_reads_its_kinds_clearance_only_where_the_term_is_on():
 def test_a_clearance_penalty_where_nothing_measures_it_is_refused_naming_the_key():
   with pytest.raises(ConfigError, match="reward.clearance_penalty"):
     load_config("asc-inc-cog", ["reward.clearance_penalty=0.1"])
+
+
+def test_the_riding_term_charges_a_step_that_ends_on_a_floor_obstacle():
+  """reward.riding_penalty per step whose physics ended with a belt on a floor obstacle (the watch's
+  riding flag: test_collisions.py checks it against the C engine); 0 where off; refused on stairs."""
+  reward = dataclasses.replace(default_config().reward, riding_penalty=0.05)
+  args = (jnp.float32(1.5), jnp.float32(2.0), jnp.float32(2.0), jnp.zeros(3), jnp.float32(0.0), jnp.float32(1.0),
+          jnp.bool_(False), math.inf)
+  mon = Monitor(reward, default_config().episode)
+  assert float(mon.evaluate(*args, jnp.bool_(True))[0]["riding"]) == pytest.approx(-0.05)
+  assert float(mon.evaluate(*args, jnp.bool_(False))[0]["riding"]) == 0.0
+  assert float(Monitor(default_config().reward, default_config().episode).evaluate(*args, jnp.bool_(True))[0]["riding"]) == 0.0
+  with pytest.raises(ConfigError, match="reward.riding_penalty"):
+    load_config("asc-inc-cog", ["reward.riding_penalty=0.1"])

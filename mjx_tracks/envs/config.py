@@ -324,6 +324,7 @@ class RewardConfig:
   collision_penalty: float = dataclasses.field(metadata=bound(0.0))  # per control step with a collision
   clearance_penalty: float = dataclasses.field(metadata=bound(0.0))  # per control step at clearance 0 (nav)
   clearance_margin: float = dataclasses.field(metadata=bound(0.01, 2.0))  # m, the clearance below which it pays
+  riding_penalty: float = dataclasses.field(metadata=bound(0.0))  # per control step with a belt on a floor obstacle (nav)
 
   def validate(self, key: str) -> None:
     require(self.kind in REWARD_SIGNALS, f"{key}.kind", lambda: f"must be one of {list(REWARD_SIGNALS)}, got {show(self.kind)}")
@@ -492,6 +493,8 @@ class TaskConfig:
     require("collision" in kind.signals or not self.control.safety_filter.enabled, "control.safety_filter.enabled",
             lambda: f"the safety filter reads walls from a horizontal scan, which {self.scene.kind} scenes do not have "
                     "(on stairs or terrain it would read the ground ahead as a wall); nav scenes only")
+    require("collision" in kind.signals or not self.reward.riding_penalty, "reward.riding_penalty",
+            lambda: f"{self.scene.kind} scenes have no floor obstacles to ride on (nav scenes)")
     require("clearance" in kind.signals or not self.reward.clearance_penalty, "reward.clearance_penalty",
             lambda: f"{self.scene.kind} scenes measure no clearance from walls (it is measured in nav scenes)")
     steps = self.control.period / self.physics.timestep
@@ -658,6 +661,7 @@ ADDED_KEYS = {("physics", "contact_slots"): -1, ("physics", "box_pairs"): -1,  #
               ("reward", "collision_penalty"): 0.0,  # before collision safety: no penalty
               ("reward", "clearance_penalty"): 0.0,  # before the clearance term: none
               ("reward", "clearance_margin"): FROM_DEFAULTS,  # read only by that term
+              ("reward", "riding_penalty"): 0.0,  # before the riding term: none
               ("episode", "distance"): "euclidean",  # before free-space distances: straight lines
               ("episode", "end_on_collision"): False,  # before collision safety: collisions go on
               ("randomization",): FROM_DEFAULTS,  # before sim-to-real randomization: off (enabled: false)

@@ -24,6 +24,8 @@ episode.end_on_collision, ends the episode.
 Clearance: with the robot's footprint c m from the nearest wall or wall obstacle (scenes.clearance),
 a step costs clearance_penalty * max(clearance_margin - c, 0) / clearance_margin (at most
 clearance_penalty, touching): room to turn before a collision, not only the collision.
+Riding: a step that ends with a track belt on a floor obstacle (nav; mjx_tracks.sim.collisions)
+costs riding_penalty: driven over, a floor box tilts and deflects the robot.
 Goal: reaching the goal earns goal_bonus once (it ends the episode): with a length-neutral safety
 penalty, the only thing that makes running out of time cost more than the last metres of progress.
 Tip-over: |roll| or |pitch| > pi/2 costs tipover_penalty and ends the episode. The episode also
@@ -142,10 +144,11 @@ class Monitor:
     return jnp.maximum(margin - clearance, 0.0) / margin
 
   def evaluate(self, dist, closest, d0, rpy, rate: jax.Array, k: jax.Array, collided: jax.Array,
-               clearance: jax.Array | float = float("inf")):
+               clearance: jax.Array | float = float("inf"), riding: jax.Array | bool = False):
     """Reward terms, new closest, terminated flag, flags dict for one step; rate: safety_rate(...);
     collided: whether the step's physics touched a wall or obstacle (mjx_tracks.sim.collisions);
-    clearance: the footprint's distance (m) from the nearest wall (inf: not measured)."""
+    clearance: the footprint's distance (m) from the nearest wall (inf: not measured); riding:
+    whether the step ended with a belt on a floor obstacle."""
     progress, closest = progress_step(dist, closest, d0, self.reward.progress_form)
     tipped = tipped_over(rpy)
     reached = goal_reached(dist)
@@ -157,6 +160,7 @@ class Monitor:
         "goal": self.reward.goal_bonus * reached.astype(jnp.float32),
         "collision": -self.reward.collision_penalty * collided.astype(jnp.float32),
         "clearance": -self.reward.clearance_penalty * self.closeness(clearance),
+        "riding": -self.reward.riding_penalty * jnp.asarray(riding, jnp.float32),
     }
     ends = tipped | reached | away | (collided & self.episode.end_on_collision)
     return terms, progress, closest, ends, {"tipped": tipped, "reached": reached, "away": away, "collided": collided}

@@ -140,7 +140,8 @@ class TrackedRobotEnv(Env):
     signal_sum, steps = es.signal_sum + sample, es.steps + 1
     rate = self.monitor.safety_rate(window, signal_sum, steps)
     terms, progress, closest, terminated, flags = self.monitor.evaluate(
-        dist, es.closest, es.d0, rpy, rate, es.penalty_k, collided, self._clearance(pos, rpy[2], es.scene))
+        dist, es.closest, es.d0, rpy, rate, es.penalty_k, collided, self._clearance(pos, rpy[2], es.scene),
+        self.watch.riding(data) if self.cfg.reward.riding_penalty else False)
     terms = {k: jnp.where(finite, t, 0.0) for k, t in terms.items()}
     terminated = terminated | ~finite
     key, k_obs = jax.random.split(es.key)
