@@ -25,7 +25,8 @@ Clearance: with the robot's footprint c m from the nearest wall or wall obstacle
 a step costs clearance_penalty * max(clearance_margin - c, 0) / clearance_margin (at most
 clearance_penalty, touching): room to turn before a collision, not only the collision.
 Riding: a step that ends with a track belt on a floor obstacle (nav; mjx_tracks.sim.collisions)
-costs riding_penalty: driven over, a floor box tilts and deflects the robot.
+costs riding_penalty: going round rather than over (results/nav/README.md: the zigzag's
+collisions come with its floor obstacles).
 Goal: reaching the goal earns goal_bonus once (it ends the episode): with a length-neutral safety
 penalty, the only thing that makes running out of time cost more than the last metres of progress.
 Tip-over: |roll| or |pitch| > pi/2 costs tipover_penalty and ends the episode. The episode also
