@@ -153,8 +153,10 @@ def test_nav_suites_evaluate_each_area_kind_alone():
   s = scene_config(load_config("nav-obstacles", [bare]), "held-out/bare-zigzag").scene  # one area kind, no floor boxes
   assert (s.nav_kinds, s.nav_floor_obstacles) == (("zigzag",), 0)
   assert scene_config(load_config("nav-obstacles"), "held-out/narrow-gap").scene.nav_kinds == ("hallway", "zigzag")
-  with pytest.raises(ConfigError, match=r"must be of the task's \['zigzag'\]"):
-    scene_config(load_config("nav", ["scene.nav_kinds=[zigzag]", bare.replace("[zigzag]", "[hallway]")]), "held-out/bare-zigzag")
+  with pytest.raises(ConfigError, match=r"held_out_nav\[0\].areas: must be distinct areas of the task's \['zigzag'\]"):
+    load_config("nav", ["scene.nav_kinds=[zigzag]", bare.replace("[zigzag]", "[hallway]")])
+  with pytest.raises(ConfigError, match=r"held_out_nav\[0\].areas"):
+    load_config("nav", [bare.replace("[zigzag]", "[zigzag, zigzag]")])
 
 
 def test_held_out_scenes_pin_their_staircase_and_bad_ones_are_named():

@@ -220,6 +220,8 @@ def test_a_robot_moving_faster_than_its_command_is_slowed_sooner():
   assert tuple(map(float, _filter().choose(jnp.float32(0.5), jnp.float32(0.0), ranges, measured))) == (0.5, 0.0, 0.0)
   v, w, changed = _filter(response=0.25).choose(jnp.float32(0.5), jnp.float32(0.0), ranges, measured)
   assert (float(v), float(w), bool(changed)) == (0.125, 0.0, True)
+  with pytest.raises(ValueError, match="measured"):
+    _filter(response=0.25).choose(jnp.float32(0.5), jnp.float32(0.0), ranges)
 
 
 def test_a_held_robot_backs_away_with_the_commanded_turn():
@@ -231,6 +233,10 @@ def test_a_held_robot_backs_away_with_the_commanded_turn():
   assert tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(0.5), _ranges(f, {0: 0.45})))) == pytest.approx((-0.3, 0.5, 1.0))
   assert tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(0.5), _ranges(f, {0: 0.45, 4: 0.52})))) == (0.0, 0.0, 1.0)
   assert tuple(map(float, f.choose(jnp.float32(0.0), jnp.float32(0.0), _ranges(f, {0: 0.45})))) == (0.0, 0.0, 0.0)
+  # straight ahead (w = 0) and turning in place (v = 0): stopped, it backs up straight (w x any scale is 0)
+  # or with the turn
+  assert tuple(map(float, f.choose(jnp.float32(1.0), jnp.float32(0.0), _ranges(f, {0: 0.45})))) == pytest.approx((-0.3, 0.0, 1.0))
+  assert tuple(map(float, f.choose(jnp.float32(0.0), jnp.float32(0.5), _ranges(f, {0: 0.45})))) == pytest.approx((-0.3, 0.5, 1.0))
   assert tuple(map(float, f.choose(jnp.float32(0.5), jnp.float32(0.0), _ranges(f, {0: 1.05})))) == (0.5, 0.0, 0.0)  # not held
 
 

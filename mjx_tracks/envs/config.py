@@ -384,7 +384,7 @@ class HeldOutTerrain:
 @dataclasses.dataclass(frozen=True)
 class HeldOutNav:
   """Navigation areas every finished study run of a nav task is evaluated on, beyond its training
-  ranges: the task's areas with these gaps and floor obstacles."""
+  ranges: the task's areas (or those of `areas`) with these gaps, floor obstacles and length."""
   name: str
   gap: tuple[float, float]  # m, C ~ U(min, max) (SceneConfig.nav_gap)
   floor_obstacles: int = dataclasses.field(metadata=bound(0, MAX_FLOOR_OBSTACLES))

@@ -112,7 +112,11 @@ class SafetyFilter:
   def poses(self, v: jax.Array, w: jax.Array, measured: jax.Array | None, times: jax.Array) -> jax.Array:
     """(len(times), 3) predicted chassis poses (x m, y m, yaw rad) under (v, w) (step 2; times evenly
     spaced from 0 where there is a response time)."""
-    return unicycle_poses(v, w, times) if self.response == 0.0 else relaxed_poses(v, w, measured, self.response, times)
+    if self.response == 0.0:
+      return unicycle_poses(v, w, times)
+    if measured is None:
+      raise ValueError("a safety filter with a response time predicts from the measured velocity: pass measured")
+    return relaxed_poses(v, w, measured, self.response, times)
 
   def clearance(self, points: jax.Array, hit: jax.Array, v: jax.Array, w: jax.Array,
                 measured: jax.Array | None = None) -> jax.Array:
@@ -140,7 +144,7 @@ class SafetyFilter:
     pick = jnp.argmin(jnp.where(clear >= floor, cost, jnp.inf))  # the last candidate, standing still, is ok for finite ranges
     v_out, w_out = cv[pick], cw[pick]
     if self.reverse > 0.0:  # step 5
-      held = (pick == len(cv) - 1) & ((v != 0.0) | (w != 0.0))
+      held = (v_out == 0.0) & (w_out == 0.0) & ((v != 0.0) | (w != 0.0))  # stopped, asked to move
       bv, bw = jnp.full(len(SCALES), -self.reverse, jnp.float32), jnp.asarray(SCALES) * w
       back_ok = clear_of(bv, bw) >= floor
       first = jnp.argmax(back_ok)  # the largest turn that qualifies (SCALES descending)

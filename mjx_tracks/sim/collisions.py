@@ -55,26 +55,28 @@ class CollisionWatch:
   def colliding(self, d) -> jax.Array:
     """(contacts,) bool: which contacts of the step just taken are collisions (their geom pairs:
     mjx_private.contacts(d).geom)."""
-    c = mjx_private.contacts(d)
-    g1, g2 = c.geom[:, 0], c.geom[:, 1]
+    g1, g2, penetrating = _penetrating(d)
     robot, belt = jnp.asarray(self.robot), jnp.asarray(self.belt)
     forbidden, belts_only = jnp.asarray(self.forbidden), jnp.asarray(self.belts_only)
 
     def hits(world, part):
       return robot[part] & (forbidden[world] | (belts_only[world] & ~belt[part]))
 
-    penetrating = c.dist - c.includemargin < 0
     return penetrating & (hits(g1, g2) | hits(g2, g1))
-
 
   def riding(self, d) -> jax.Array:
     """() bool: whether a belt touches a `belts_only` geom (a floor obstacle under the tracks) in the
     contacts of the step just taken."""
-    c = mjx_private.contacts(d)
-    g1, g2 = c.geom[:, 0], c.geom[:, 1]
+    g1, g2, penetrating = _penetrating(d)
     belt, belts_only = jnp.asarray(self.belt), jnp.asarray(self.belts_only)
-    pair = (belts_only[g1] & belt[g2]) | (belts_only[g2] & belt[g1])
-    return jnp.any(pair & (c.dist - c.includemargin < 0))
+    return jnp.any(penetrating & ((belts_only[g1] & belt[g2]) | (belts_only[g2] & belt[g1])))
+
+
+def _penetrating(d) -> tuple[jax.Array, jax.Array, jax.Array]:
+  """(geom 1, geom 2, whether they penetrate) of each contact of the step just taken: the contacts the
+  solver acts on (dist - includemargin < 0)."""
+  c = mjx_private.contacts(d)
+  return c.geom[:, 0], c.geom[:, 1], c.dist - c.includemargin < 0
 
 
 def robot_at_rest(m: mujoco.MjModel) -> tuple[mujoco.MjData, np.ndarray]:

@@ -34,6 +34,10 @@ class Nav(SceneKind):
     require(bool(areas) and all(a in NAV_AREAS for a in areas) and len(set(areas)) == len(areas),
             "scene.nav_kinds", lambda: f"must be a non-empty list of distinct areas of {list(NAV_AREAS)}, got {list(areas)}")
     require("w" in CONTROL_MODES[cfg.control.mode], "control.mode", "navigation needs a mode with angular velocity w")
+    for i, h in enumerate(cfg.evaluation.held_out_nav):
+      require(all(a in areas for a in h.areas) and len(set(h.areas)) == len(h.areas),
+              f"evaluation.held_out_nav[{i}].areas",
+              lambda h=h: f"must be distinct areas of the task's {list(areas)} (or [] for all), got {list(h.areas)}")
     no_held_out_staircases(cfg)
 
   drawn = ("sampler", "nav_kinds")  # uniform and each area alone: one program (held-out areas change more)
@@ -65,8 +69,6 @@ class Nav(SceneKind):
       h = held.get(scene[len(HELD_OUT):])
       if h is None:
         raise ConfigError(f"scene {scene!r}: the task's held-out areas (evaluation.held_out_nav) are {list(held)}")
-      if not set(h.areas) <= set(cfg.scene.nav_kinds):
-        raise ConfigError(f"scene {scene!r}: its areas {list(h.areas)} must be of the task's {list(cfg.scene.nav_kinds)}")
       return longer_episode(replace_scene(cfg, nav_gap=tuple(h.gap), nav_floor_obstacles=h.floor_obstacles,
                                           nav_length=h.length, nav_kinds=tuple(h.areas) or cfg.scene.nav_kinds),
                             h.length / cfg.scene.nav_length)
