@@ -115,6 +115,17 @@ class RobotSpec:
     """Track axis height when resting on flat ground (m)."""
     return self.track.radius
 
+  def pose_lift(self, joint_angles, xp=np):
+    """m: how much higher than spawn_height the chassis must start, level, for its flippers at
+    joint_angles (rad, joint_names() order) to stay above flat ground. A flipper lowered by phi (a
+    negative angle: positive raises the tip) reaches, with each capsule of its belt (end e m from
+    the pivot, radius r m), e sin(phi) + r below its pivot, which lies on the track axis; lifted by
+    the deepest reach beyond spawn_height (0 where none reaches past it: in line, raised). xp: numpy,
+    or jax.numpy where the angles are traced."""
+    lowered = xp.maximum(-xp.asarray(joint_angles)[: len(self.flippers)], 0.0)  # (n_flippers,) rad
+    reach = [seg.end * xp.sin(lowered[i]) + seg.radius for i, f in enumerate(self.flippers) for seg in f.segments]
+    return xp.maximum(xp.max(xp.stack(reach)) - self.spawn_height, 0.0)
+
   def joint_limits(self) -> np.ndarray:
     """(n_joints, 2) limits of the position-controlled joints: flippers, then arm."""
     lims = [(-self.flipper_limit, self.flipper_limit)] * len(self.flippers)

@@ -90,9 +90,13 @@ class Simulator:
     return mj
 
   def init_data(self, pos: jax.Array, yaw: jax.Array, joint_angles: jax.Array | None = None) -> mjx.Data:
-    """Data with the chassis resting at ground point pos (m) with heading yaw (rad)."""
+    """Data with the chassis resting at ground point pos (m) with heading yaw (rad), its joints at
+    joint_angles (rad; None: 0), raised where lowered flippers would reach below the ground
+    (RobotSpec.pose_lift)."""
     d = mjx.make_data(self.model, impl="jax", device=jax.local_devices()[0])
+    lift = 0.0 if joint_angles is None else self.robot.pose_lift(joint_angles, jnp)
     qpos = d.qpos.at[0:3].set(pos + jnp.array([0.0, 0.0, self.robot.spawn_height + SPAWN_CLEARANCE]))
+    qpos = qpos.at[2].add(lift)  # m
     qpos = qpos.at[3:7].set(yaw_quat(jnp.asarray(yaw, jnp.float32)))
     if joint_angles is not None:
       qpos = qpos.at[self.layout.joint_qpos].set(joint_angles)
