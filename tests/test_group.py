@@ -79,17 +79,18 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
     sources = {(r["source"], r["step"]) for r in d.stats(record["run_id"])}
     assert ("train", 1024) in sources and ("probe", 512) in sources and ("probe", 1024) in sources
     params.append(RunCheckpoints(folder).restore()[0])
-    # the program's probe (every run's trials in one rollout) reads what `train.evaluate` of the run's
-    # policy reads on the same trials: each run's own, not its neighbour's
-    report = str(tmp_path / f"eval-s{seed}.json")
-    assert evaluate.main([folder, "--scene", "hardest", "--out", report, "--db", database]) == 0
-    alone = json.load(open(report))["metrics"]
     (probe,) = [r for r in d.stats(record["run_id"]) if (r["source"], r["step"]) == ("probe", 1024)]
-    # the same trials in another program (vmapped): a trial's physics may round differently
-    assert probe["success_rate"] == pytest.approx(alone["success"]["mean"], abs=0.011)  # one trial of 100
-    assert probe["progress_mean"] == pytest.approx(alone["progress"]["mean"], abs=1e-3)
-    probes.append(probe["progress_mean"])
-  assert probes[0] != probes[1]
+    probes.append(probe)
+  assert probes[0]["progress_mean"] != probes[1]["progress_mean"]
+  # the program's probe (every run's trials in one rollout) reads what `train.evaluate` of the run's
+  # policy reads on the same trials: the second run's own, not its neighbour's (their probes differ)
+  report = str(tmp_path / "eval-s1.json")
+  assert evaluate.main([os.path.join(out, "s1"), "--scene", "hardest", "--out", report, "--db", database]) == 0
+  alone = json.load(open(report))["metrics"]
+  # the same trials in another program (vmapped): a trial's physics may round differently
+  assert probes[1]["success_rate"] == pytest.approx(alone["success"]["mean"], abs=0.011)  # one trial of 100
+  assert probes[1]["progress_mean"] == pytest.approx(alone["progress"]["mean"], abs=1e-3)
+  assert probes[0]["progress_mean"] != pytest.approx(alone["progress"]["mean"], abs=1e-3)  # not the neighbour's
   leaves = [jax.tree_util.tree_leaves(p) for p in params]
   assert any(np.asarray(a).shape == np.asarray(b).shape and not np.array_equal(a, b)
              for a, b in zip(*leaves))  # two seeds, two runs
