@@ -11,7 +11,10 @@ flipper pairs' angles (rad, each pair's mean), and the chassis' motion
 over the step in its own frame (dx, dy m, dyaw rad) as the filter predicted it (its command held for
 one control period: a unicycle, or with a response time from the measured velocity) and as it was.
 Where the two motions part, the filter's prediction, not its sensing, let the collision through.
-Prints the rows and writes JSON with the device, command and date. CPU: about 3 minutes per call.
+A trial's path depends on the batch it runs in (the batched program rounds differently): traced with
+other trials than the evaluation's, it may collide at another step (trial 78 of ppo-long seed 3: step
+36 beside four others, step 56 alone). Prints the rows and writes JSON with the device, command and
+date. CPU: about a minute for five trials.
 
 python scripts/analysis/nav_filter_trace.py RUN --trials 49,78 [--area nav/zigzag] [--of 100] [--steps 6] \
     [--set control.safety_filter.KEY=VALUE ...] --out FILE
@@ -20,7 +23,6 @@ python scripts/analysis/nav_filter_trace.py RUN --trials 49,78 [--area nav/zigza
 from __future__ import annotations
 
 import argparse
-import functools
 import os
 import sys
 
@@ -32,9 +34,9 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspa
 from mjx_tracks import atomic, compile_cache  # noqa: E402
 from mjx_tracks.sim.pose import chassis_rpy  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
-from mjx_tracks.envs.config import ConfigError, apply_override, from_dict  # noqa: E402
+from mjx_tracks.envs.config import ConfigError  # noqa: E402
 from train.core.run_record import run_config  # noqa: E402
-from nav_safety_filter import variants  # noqa: E402  (scripts/analysis/nav_safety_filter.py)
+from nav_safety_filter import configured, variants  # noqa: E402  (scripts/analysis/nav_safety_filter.py)
 from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_env, trial_keys, trial_starts  # noqa: E402
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
 
@@ -64,7 +66,7 @@ def trace(run_dir: str, area: str, trials: list[int], of: int, sets: list[str]):
   config with the filter's overrides `sets` (control.safety_filter.KEY=VALUE; they turn it on)."""
   cfg = run_config(run_dir)
   if sets:
-    cfg = from_dict(functools.reduce(apply_override, variants([f"set:{';'.join(sets)}"])["set"], cfg.to_dict()))
+    cfg = configured(cfg.to_dict(), variants([f"set:{';'.join(sets)}"])["set"])
   if not cfg.control.safety_filter.enabled or cfg.randomization.enabled:
     raise SystemExit(f"error: {run_dir}: needs control.safety_filter enabled (the run's, or --set) and no randomization")
   core, draw = scene_env(cfg, area)

@@ -50,6 +50,11 @@ def variants(specs: list[str]) -> dict[str, list[str]]:
   return out
 
 
+def configured(raw: dict, overrides: list[str]):
+  """The TaskConfig of a full config mapping `raw` with KEY=VALUE overrides (ConfigError names a bad one)."""
+  return from_dict(functools.reduce(apply_override, overrides, raw))
+
+
 def shared_config(runs: list[str]) -> dict:
   """The runs' recorded config (ValueError where they differ but for the seed)."""
   configs = [read_run_record(r)["config"] for r in runs]
@@ -91,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
   try:
     named = variants(args.variant)
     raw = from_dict(shared_config(args.runs)).to_dict()  # with the keys added since they ran (the filter's among them)
-    settings = {AS_TRAINED: from_dict(raw), **{k: from_dict(functools.reduce(apply_override, v, raw)) for k, v in named.items()}}
+    settings = {AS_TRAINED: from_dict(raw), **{k: configured(raw, v) for k, v in named.items()}}
     loaded = [load_policy_params(os.path.join(r, "policy")) for r in args.runs]
   except (ValueError, FileNotFoundError) as e:  # ConfigError is a ValueError
     p.error(str(e))
