@@ -75,6 +75,14 @@ def success(goal_reached_sum) -> np.ndarray:
   return (np.asarray(goal_reached_sum, np.float64) > 0).astype(np.float64)
 
 
+def timed_out(figures: dict) -> np.ndarray:
+  """The one definition of a trial that ran out of time, from its EPISODE figures (arrays of trials):
+  it neither reached the goal, touched a wall or obstacle (`collided`) nor tipped over. (A trial that
+  collided and went on, where a collision does not end the episode, is counted as collided.)"""
+  reached, hit, tipped = (np.asarray(figures[k], np.float64) > 0 for k in ("success", "collided", "tipped_over"))
+  return ~reached & ~hit & ~tipped
+
+
 def trajectory_success(reached, tipped) -> bool:
   """success() of a trajectory cut where the tasks end an episode: at the first step that reaches
   the goal or tips over (reached, tipped: per-step 0/1 flags)."""

@@ -5,8 +5,8 @@ import sqlite3
 import numpy as np
 import pytest
 
-from mjx_tracks.metrics import (EPISODE_NAMES, REPORT_COLUMN, STEP_NAMES, episode_figures, trajectory_success,
-                                trial_row)
+from mjx_tracks.metrics import (EPISODE_NAMES, REPORT_COLUMN, STEP_NAMES, episode_figures, timed_out,
+                                trajectory_success, trial_row)
 
 
 def test_episode_figures_match_a_hand_computation():
@@ -64,3 +64,9 @@ def test_a_database_from_before_a_metric_existed_gains_its_column(tmp_path):
     cols = lambda t: [r[1] for r in c.execute(f"PRAGMA table_info({t})")]  # noqa: E731
     assert {"collided", "length", "budget"} <= set(cols("evals")) and "collision_rate" in cols("stats")
     assert c.execute("SELECT progress, collided FROM evals").fetchone() == (0.5, None)
+
+
+def test_a_trial_timed_out_where_it_neither_reached_collided_nor_tipped():
+  # four trials: reached; collided (and went on); tipped over; none of these
+  figures = {"success": [1.0, 0.0, 0.0, 0.0], "collided": [0.0, 1.0, 0.0, 0.0], "tipped_over": [0.0, 0.0, 1.0, 0.0]}
+  assert timed_out(figures).tolist() == [False, False, False, True]

@@ -14,7 +14,7 @@ centre plus its bounding radius, the robot level at rest, plus REACH_SLACK).
 How tight is each trial's layout? For each disc radius of `--discs` (m; capped, as the scene caps its
 passage, at C / 2 - GAP_MARGIN for the area's gap C), whether a way round the wall and floor obstacles
 leads from the spawn to the goal (scenes.navigation: free_space_distance with every box), counted
-among the trials that succeeded, collided and timed out (neither).
+among the trials that succeeded, collided and timed out (mjx_tracks.metrics.timed_out; tip-overs are in none).
 Prints a line per run and area and writes JSON with the device, command and date. CPU, resets only
 (no policy is run).
 
@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from mjx_tracks import atomic
+from mjx_tracks.metrics import timed_out
 from mjx_tracks.sim.collisions import robot_at_rest
 from scenes.navigation import NAV_AREAS, WALL_OBSTACLES, area_corners
 from train.core.run_record import run_config
@@ -104,7 +105,7 @@ def sites(run_dir: str, area: str, check_radius: float, discs: tuple[float, ...]
   body_reach, robot_reach = reaches(core)
   in_reach = near[hit] <= np.array([body_reach, robot_reach, robot_reach])  # (collided, 3)
   reach = collections.Counter(" + ".join(k for k, r in zip(KINDS, row) if r) or "none" for row in in_reach)
-  outcome = {"succeeded": ok, "collided": hit, "timed out": ~ok & ~hit}
+  outcome = {"succeeded": ok, "collided": hit, "timed out": timed_out(per)}
   tight = {f"{r:g}": {k: int((~way[:, i] & m).sum()) for k, m in outcome.items()} for i, r in enumerate(discs)}
   return {"run": run_dir, "area": area, "trials": int(len(hit)), "success": float(ok.mean()),
           "collided": int(hit.sum()), "success_goal_miss_max_m": float(miss.max()) if miss.size else None,

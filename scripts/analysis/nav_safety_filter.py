@@ -26,6 +26,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 from mjx_tracks import atomic, compile_cache  # noqa: E402
 from mjx_tracks.envs.config import apply_override, from_dict  # noqa: E402
+from mjx_tracks.metrics import timed_out  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from train.core.run_record import read_run_record  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, group_trial_runner  # noqa: E402
@@ -69,7 +70,7 @@ def outcomes(per_trial: dict) -> dict:
   collided = np.asarray(per_trial["collided"]) > 0
   tipped = np.asarray(per_trial["tipped_over"]) > 0
   return {"success": round(float(success.mean()), 3), "collided": int(collided.sum()),
-          "timed_out": int((~success & ~collided & ~tipped).sum()), "tipped_over": int(tipped.sum()),
+          "timed_out": int(timed_out(per_trial).sum()), "tipped_over": int(tipped.sum()),
           "filtered_steps": round(float(np.mean(per_trial["filtered"])), 4),
           "per_trial_success": success.astype(int).tolist(), "per_trial_collided": collided.astype(int).tolist()}
 

@@ -4,8 +4,8 @@ that keeps the task's clearance, scenes.geodesic, as the reward measures it; wit
 --floor-clearance, around the floor obstacles too), turning on the spot when the path turns
 sharply, flippers held; on each scene of the tasks' evaluation suites, success
 and collisions by the tasks' own rules. Prints a table and writes JSON with the device, command and
-date; each row lists the trials that collided and those that timed out (neither reached nor
-collided: tip-overs included), by index: trial t is the same layout as trial t of every evaluation of that scene.
+date; each row lists the trials that collided and those that timed out (mjx_tracks.metrics.timed_out:
+neither reached, collided nor tipped over; files written before 2026-11-27 counted tip-overs among them), by index: trial t is the same layout as trial t of every evaluation of that scene.
 
 python scripts/analysis/nav_scripted.py --tasks nav-hard --out results/hard_tier/nav-scripted-cpu.json \
     [--scenes nav/hallway,nav/zigzag] [--trials 100] [--speed 0.5] [--floor-clearance 0.44] [--set KEY=VALUE ...]
@@ -28,6 +28,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspa
 from mjx_tracks import atomic, compile_cache  # noqa: E402
 from mjx_tracks.envs.config import load_config  # noqa: E402
 from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: E402
+from mjx_tracks.metrics import timed_out  # noqa: E402
 from mjx_tracks.sim.pose import chassis_rpy, wrap_angle  # noqa: E402
 from scenes.navigation import WALL_OBSTACLES  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_config, suite_scenes, trial_runner  # noqa: E402
@@ -77,7 +78,7 @@ def run(task: str, scene: str, speed: float, trials: int, overrides: list[str],
           "floor_clearance_m": floor_clearance, "trials": trials,
           **{k: mean(k) for k in ("success", "progress", "collided", "tipped_over", "length")},
           "collided_trials": np.flatnonzero(np.asarray(figs["collided"]) > 0).tolist(),  # indices: compare policies trial by trial
-          "timed_out_trials": np.flatnonzero((np.asarray(figs["success"]) + np.asarray(figs["collided"])) == 0).tolist()}
+          "timed_out_trials": np.flatnonzero(timed_out(figs)).tolist()}
 
 
 def main(argv: list[str] | None = None) -> int:
