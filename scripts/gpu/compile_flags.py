@@ -1,13 +1,16 @@
-"""Issue 30, compilation: how long the PPO training step of `python -m train.run` compiles from an
-empty cache under XLA flag variants, and what each costs in training speed. Each variant runs
-`python -m train.run --task TASK --steps STEPS --early-stop none --seed 0` in its own process with
+"""Issue 30, compilation and launches: how long the training step of `python -m train.run` compiles from
+an empty cache under XLA flag variants, and how fast each trains. Each variant runs
+`python -m train.run --task TASK --algo ALGO [--preset P] --steps STEPS --early-stop none --seed 0 --hp H ...`
+(H: --hp, default training_metrics_steps=81920, a PPO [train] line every update) in its own process with
 its own empty compilation cache (MJX_TRACKS_CACHE) and MJX_TRACKS_COMPILE_LOG, then
 `python -m train.evaluate RUN --scene hardest --trials 100` (its wall time: the evaluation
 program's compilation and 100 trials). Writes OUT/compile-flags.json: per variant the run's
 "compiled in N s", its steady training steps/s (median of its [train] lines after the first), the
 ten longest XLA compilations, the evaluation's wall s; with the device, command and date.
 Usage (GPU host): python scripts/gpu/compile_flags.py OUT [--task asc-inc-cog] [--steps 600000]
-    [--variants NAME,...] [--skip-eval]"""
+    [--algo ppo] [--preset P] [--hp KEY=VALUE ...] [--variants NAME,...] [--skip-eval]
+E.g. the paper's one-robot SAC, launch-bound (~16 ms a training step): --algo sac --preset paper --steps 5000
+--hp num_evals=1 --hp max_replay_size=20000 --hp training_metrics_steps=500 --skip-eval."""
 
 from __future__ import annotations
 
@@ -34,6 +37,10 @@ VARIANTS = {  # name -> XLA_FLAGS added to the environment's
     "cheap-llvm-force-16": "--xla_llvm_disable_expensive_passes=true --xla_gpu_force_compilation_parallelism=16",
     "llvm-o1-force-16": "--xla_backend_optimization_level=1 --xla_gpu_force_compilation_parallelism=16",
     "ptxas-o0-force-16": "--xla_gpu_disable_gpuasm_optimizations=true --xla_gpu_force_compilation_parallelism=16",
+    # CUDA graphs: XLA's command buffers also over while loops and conditionals (a lax.scan of training steps
+    # or of physics substeps becomes one graph launch instead of a launch per kernel), and none at all
+    "cmdbuf-while": "--xla_gpu_enable_command_buffer=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE",
+    "cmdbuf-off": "--xla_gpu_enable_command_buffer=",
 }
 
 
@@ -51,9 +58,9 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
   env = {**os.environ, "MJX_TRACKS_CACHE": f"{work}/{name}-cache", "MJX_TRACKS_COMPILE_LOG": f"{work}/{name}.compile.log",
          "XLA_FLAGS": " ".join(x for x in (os.environ.get("XLA_FLAGS", ""), flags) if x)}
   run = f"{work}/{name}-run"
-  cmd = [sys.executable, "-m", "train.run", "--task", args.task, "--steps", str(args.steps), "--early-stop", "none",
-         "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite",
-         "--hp", "training_metrics_steps=81920"]  # a [train] line (steps/s) every PPO update
+  cmd = [sys.executable, "-m", "train.run", "--task", args.task, "--algo", args.algo, "--steps", str(args.steps),
+         "--early-stop", "none", "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite",
+         *(["--preset", args.preset] if args.preset else []), *(x for h in args.hp for x in ("--hp", h))]
   t0 = time.time()
   proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
   out = proc.stdout + (f"\n[stderr] {proc.stderr[-400:]}" if proc.returncode else "")  # why a variant failed
@@ -85,9 +92,14 @@ def main() -> None:
   p.add_argument("out")
   p.add_argument("--task", default="asc-inc-cog")
   p.add_argument("--steps", type=int, default=600_000)
+  p.add_argument("--algo", default="ppo")
+  p.add_argument("--preset", default=None, help="train.run's --preset (default: its own)")
+  p.add_argument("--hp", action="append", default=None,
+                 help="train.run's --hp KEY=VALUE, repeatable (default: training_metrics_steps=81920)")
   p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of " + ", ".join(VARIANTS))
   p.add_argument("--skip-eval", action="store_true", help="no evaluation after each run (compile and training only)")
   args = p.parse_args()
+  args.hp = args.hp or ["training_metrics_steps=81920"]  # a [train] line (steps/s) every PPO update
   import jax  # noqa: PLC0415
   device = f"{jax.devices()[0].device_kind} x {jax.device_count()}, JAX {jax.__version__}"
   results = {}
