@@ -14,7 +14,8 @@ centre plus its bounding radius, the robot level at rest, plus REACH_SLACK).
 How tight is each trial's layout? For each disc radius of `--discs` (m; capped, as the scene caps its
 passage, at C / 2 - GAP_MARGIN for the area's gap C), whether a way round the wall and floor obstacles
 leads from the spawn to the goal (scenes.navigation: free_space_distance with every box), counted
-among the trials that succeeded, collided and timed out (mjx_tracks.metrics.timed_out; tip-overs are in none).
+among the trials that succeeded, collided and timed out (mjx_tracks.metrics.timed_out; a trial that
+tipped over is in none).
 Prints a line per run and area and writes JSON with the device, command and date. CPU, resets only
 (no policy is run).
 

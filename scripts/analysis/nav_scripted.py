@@ -5,7 +5,8 @@ that keeps the task's clearance, scenes.geodesic, as the reward measures it; wit
 sharply, flippers held; on each scene of the tasks' evaluation suites, success
 and collisions by the tasks' own rules. Prints a table and writes JSON with the device, command and
 date; each row lists the trials that collided and those that timed out (mjx_tracks.metrics.timed_out:
-neither reached, collided nor tipped over; files written before 2026-11-27 counted tip-overs among them), by index: trial t is the same layout as trial t of every evaluation of that scene.
+neither reached, collided nor tipped over; files written before 2026-11-27 counted tip-overs among
+them), by index: trial t is the same layout as trial t of every evaluation of that scene.
 
 python scripts/analysis/nav_scripted.py --tasks nav-hard --out results/hard_tier/nav-scripted-cpu.json \
     [--scenes nav/hallway,nav/zigzag] [--trials 100] [--speed 0.5] [--floor-clearance 0.44] [--set KEY=VALUE ...]
