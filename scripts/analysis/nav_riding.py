@@ -1,0 +1,89 @@
+"""Do a navigation policy's collisions follow its riding on floor obstacles? Trial by trial.
+
+Each run's exported policy drives the evaluation's trials of a navigation area (train.evaluate's
+trials: the area's draw, reset keys from EVAL_SEED, eps EVAL_EPS, deterministic; the run as it was
+configured), all in one batch. At the start of every control step it reads whether a track belt rides
+on a floor obstacle (CollisionWatch.riding, the riding penalty's signal) and after it whether the robot
+collided; a trial ends at its first done step (goal, collision or tip-over). Per run and in all: the
+trials that rode at least once and those that never did, with how many of each collided, and of the
+collided trials how many rode in the `--window` control steps up to and including the colliding one.
+The batch is not the evaluation's program (and this CPU is not its GPU), so a trial's path may differ
+from the study's; the counts are samples of the same policy on the same layouts. Prints a line per run
+and writes JSON with the device, command and date. CPU: about 3 min per run of 100 trials (2 cores).
+
+python scripts/analysis/nav_riding.py RUN [RUN ...] [--area nav/zigzag] [--trials 100] [--window 4] --out FILE
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+import jax
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+from mjx_tracks import atomic, compile_cache  # noqa: E402
+from train.core.policy import act_from_params, load_policy_params  # noqa: E402
+from train.core.run_record import run_config  # noqa: E402
+from train.evaluation import EVAL_EPS, EVAL_SEED, scene_env, trial_keys, trial_starts  # noqa: E402
+from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
+
+
+def rollout(run_dir: str, area: str, trials: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+  """(riding at each step's start, collided after it, done after it): each (max_steps, trials) of 0/1."""
+  cfg = run_config(run_dir)
+  core, draw = scene_env(cfg, area)
+  spec, params = load_policy_params(os.path.join(run_dir, "policy"))
+  act = act_from_params(spec)(params)
+  start = trial_starts(core, trial_keys(trials, EVAL_SEED), EVAL_EPS, None, draw)
+
+  def body(s, _):
+    riding = jax.vmap(lambda x: core.watch.riding(x.pipeline_state.data))(s)
+    n = jax.vmap(core.step)(s, act(s.obs))
+    return n, (riding, n.pipeline_state.collided, n.done)
+  out = jax.jit(lambda s: jax.lax.scan(body, s, None, length=cfg.episode.max_steps)[1])(start)
+  return tuple(np.asarray(x) > 0 for x in out)
+
+
+def tally(riding: np.ndarray, collided: np.ndarray, done: np.ndarray, window: int) -> dict:
+  """Counts over the trials (columns), each cut at its first done step."""
+  steps = riding.shape[0]
+  end = np.where(done.any(axis=0), done.argmax(axis=0), steps - 1)  # the last step of each episode
+  live = np.arange(steps)[:, None] <= end[None, :]
+  rode = (riding & live).any(axis=0)
+  hit = (collided & live).any(axis=0)
+  first = collided.argmax(axis=0)
+  near = np.array([riding[max(0, f - window + 1): f + 1, k].any() for k, f in enumerate(first)])
+  return {"trials": int(riding.shape[1]), "rode": int(rode.sum()), "rode_collided": int((rode & hit).sum()),
+          "never_rode": int((~rode).sum()), "never_rode_collided": int((~rode & hit).sum()),
+          "collided": int(hit.sum()), "collided_riding_in_window": int((hit & near).sum()),
+          "riding_steps_mean": round(float((riding & live).sum(axis=0).mean()), 3)}
+
+
+def main(argv: list[str] | None = None) -> int:
+  p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  p.add_argument("runs", nargs="+", help="run folders, each with policy/")
+  p.add_argument("--area", default="nav/zigzag")
+  p.add_argument("--trials", type=int, default=100)
+  p.add_argument("--window", type=int, default=4, help="control steps up to and including a collision's")
+  p.add_argument("--out", required=True)
+  args = p.parse_args(argv)
+  if args.trials < 1 or args.window < 1:
+    p.error("--trials and --window: at least 1")
+  compile_cache.enable()
+  rows = []
+  for run_dir in args.runs:
+    rows.append({"run": os.path.basename(os.path.normpath(run_dir)), **tally(*rollout(run_dir, args.area, args.trials),
+                                                                               args.window)})
+    print(rows[-1], flush=True)
+  total = {k: sum(r[k] for r in rows) for k in rows[0] if k not in ("run", "riding_steps_mean")}
+  print("all", total, flush=True)
+  atomic.write_json(args.out, {**provenance(), "area": args.area, "window_steps": args.window, "all": total,
+                               "rows": rows})
+  return 0
+
+
+if __name__ == "__main__":
+  raise SystemExit(main())
