@@ -25,6 +25,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 from mjx_tracks import atomic, compile_cache  # noqa: E402
+from mjx_tracks.envs.config import ConfigError  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from train.core.run_record import run_config  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_env, trial_keys, trial_starts  # noqa: E402
@@ -72,11 +73,17 @@ def main(argv: list[str] | None = None) -> int:
   args = p.parse_args(argv)
   if args.trials < 1 or args.window < 1:
     p.error("--trials and --window: at least 1")
+  for run_dir in args.runs:  # before any compilation
+    if not all(os.path.exists(os.path.join(run_dir, f)) for f in ("run.json", "policy")):
+      p.error(f"{run_dir}: not a run folder with run.json and policy/")
   compile_cache.enable()
   rows = []
   for run_dir in args.runs:
-    rows.append({"run": os.path.basename(os.path.normpath(run_dir)), **tally(*rollout(run_dir, args.area, args.trials),
-                                                                               args.window)})
+    try:
+      flags = rollout(run_dir, args.area, args.trials)
+    except (ValueError, ConfigError) as e:
+      p.error(f"{run_dir}: {e}")
+    rows.append({"run": os.path.basename(os.path.normpath(run_dir)), **tally(*flags, args.window)})
     print(rows[-1], flush=True)
   total = {k: sum(r[k] for r in rows) for k in rows[0] if k not in ("run", "riding_steps_mean")}
   print("all", total, flush=True)
