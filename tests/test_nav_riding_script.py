@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "analysis"))
-from nav_riding import tally  # noqa: E402
+from nav_riding import collisions, tally  # noqa: E402
 
 
 def test_riding_and_collisions_are_counted_per_trial_up_to_its_end():
@@ -24,3 +24,19 @@ def test_riding_and_collisions_are_counted_per_trial_up_to_its_end():
   t = tally(riding, collided, done, window=4)
   assert t == {"trials": 4, "rode": 3, "rode_collided": 2, "never_rode": 1, "never_rode_collided": 1,
                "collided": 3, "collided_riding_in_window": 1, "riding_steps_mean": 0.75}
+
+
+def test_each_collision_lists_its_step_riding_and_nearest_floor_obstacle():
+  # 3 steps, 2 trials; boxes 0-1 are the area's wall obstacles (never measured), 2-3 floor obstacles.
+  # Trial 0 rides at step 0 and collides at step 1 with its chassis at (1, 0): floor box 2 is a 0.2 x 0.2
+  # m square (half 0.1) centred at (1.5, 0), its footprint 0.4 m away; box 3 far. Trial 1 never collides.
+  import types
+  riding, collided, done = (np.zeros((3, 2), bool) for _ in range(3))
+  riding[0, 0], collided[1, 0], done[1, 0] = True, True, True
+  xy = np.zeros((3, 2, 2))
+  xy[1, 0] = [1.0, 0.0]
+  pos = np.zeros((2, 4, 3))
+  pos[:, 0, :2], pos[:, 1, :2], pos[:, 2, :2], pos[:, 3, :2] = [1.0, 0.0], [1.0, 0.0], [1.5, 0.0], [9.0, 9.0]
+  scene = types.SimpleNamespace(box_pos=pos, box_size=np.full((2, 4, 3), 0.1), box_yaw=np.zeros((2, 4)))
+  rows = collisions(riding, collided, done, xy, scene, window=4)
+  assert rows == [{"trial": 0, "step": 1, "riding_in_window": True, "floor_box_m": 0.4}]

@@ -6,12 +6,16 @@ configured), all in one batch. At the start of every control step it reads wheth
 on a floor obstacle (CollisionWatch.riding, the riding penalty's signal) and after it whether the robot
 collided; a trial ends at its first done step (goal, collision or tip-over). Per run and in all: the
 trials that rode at least once and those that never did, with how many of each collided, and of the
-collided trials how many rode in the `--window` control steps up to and including the colliding one.
+collided trials how many rode in the `--window` control steps up to and including the colliding one;
+each collision's trial, step, whether it rode in that window, and how far the chassis centre was from
+the nearest floor obstacle's footprint after the colliding step (m, 0 over it), with how many of the
+collisions without riding came within `--near` m of one.
 The batch is not the evaluation's program (and this CPU is not its GPU), so a trial's path may differ
 from the study's; the counts are samples of the same policy on the same layouts. Prints a line per run
 and writes JSON with the device, command and date. CPU: about 3 min per run of 100 trials (2 cores).
 
-python scripts/analysis/nav_riding.py RUN [RUN ...] [--area nav/zigzag] [--trials 100] [--window 4] --out FILE
+python scripts/analysis/nav_riding.py RUN [RUN ...] [--area nav/zigzag] [--trials 100] [--window 4] [--near 1.0] \
+    --out FILE
 """
 
 from __future__ import annotations
@@ -30,10 +34,13 @@ from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from train.core.run_record import run_config  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_env, trial_keys, trial_starts  # noqa: E402
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
+from nav_collision_sites import footprint_distance  # noqa: E402  (scripts/analysis/nav_collision_sites.py)
+from scenes.navigation import WALL_OBSTACLES  # noqa: E402
 
 
-def rollout(run_dir: str, area: str, trials: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-  """(riding at each step's start, collided after it, done after it): each (max_steps, trials) of 0/1."""
+def rollout(run_dir: str, area: str, trials: int):
+  """(riding at each step's start, collided after it, done after it: each (max_steps, trials) of 0/1;
+  the chassis' (x, y) after each step (max_steps, trials, 2) m; the trials' scenes)."""
   cfg = run_config(run_dir)
   core, draw = scene_env(cfg, area)
   spec, params = load_policy_params(os.path.join(run_dir, "policy"))
@@ -43,9 +50,27 @@ def rollout(run_dir: str, area: str, trials: int) -> tuple[np.ndarray, np.ndarra
   def body(s, _):
     riding = jax.vmap(lambda x: core.watch.riding(x.pipeline_state.data))(s)
     n = jax.vmap(core.step)(s, act(s.obs))
-    return n, (riding, n.pipeline_state.collided, n.done)
-  out = jax.jit(lambda s: jax.lax.scan(body, s, None, length=cfg.episode.max_steps)[1])(start)
-  return tuple(np.asarray(x) > 0 for x in out)
+    xy = n.pipeline_state.data.xpos[:, core.sim.layout.chassis_body, :2]
+    return n, (riding, n.pipeline_state.collided, n.done, xy)
+  *flags, xy = jax.jit(lambda s: jax.lax.scan(body, s, None, length=cfg.episode.max_steps)[1])(start)
+  return (*(np.asarray(x) > 0 for x in flags), np.asarray(xy), jax.tree_util.tree_map(np.asarray, start.pipeline_state.scene))
+
+
+def collisions(riding, collided, done, xy, scene, window: int) -> list[dict]:
+  """Each trial's first collision within its episode: trial, step, riding in the window up to it, and the
+  chassis centre's distance (m) from the nearest floor obstacle's footprint after that step (None: none)."""
+  rows = []
+  for k in range(collided.shape[1]):
+    end = int(done[:, k].argmax()) if done[:, k].any() else collided.shape[0] - 1
+    hits = np.flatnonzero(collided[: end + 1, k])
+    if hits.size:
+      f = int(hits[0])
+      floor = slice(WALL_OBSTACLES, None)
+      d = footprint_distance(xy[f, k][None], scene.box_pos[k, floor, :2][None], scene.box_size[k, floor, :2][None],
+                             scene.box_yaw[k, floor][None])[0]
+      rows.append({"trial": k, "step": f, "riding_in_window": bool(riding[max(0, f - window + 1): f + 1, k].any()),
+                   "floor_box_m": round(float(d.min()), 3) if d.size else None})
+  return rows
 
 
 def tally(riding: np.ndarray, collided: np.ndarray, done: np.ndarray, window: int) -> dict:
@@ -69,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("--area", default="nav/zigzag")
   p.add_argument("--trials", type=int, default=100)
   p.add_argument("--window", type=int, default=4, help="control steps up to and including a collision's")
+  p.add_argument("--near", type=float, default=1.0, help="m: a floor obstacle this near the chassis centre counts")
   p.add_argument("--out", required=True)
   args = p.parse_args(argv)
   if args.trials < 1 or args.window < 1:
@@ -83,11 +109,16 @@ def main(argv: list[str] | None = None) -> int:
       flags = rollout(run_dir, args.area, args.trials)
     except (ValueError, ConfigError) as e:
       p.error(f"{run_dir}: {e}")
-    rows.append({"run": os.path.basename(os.path.normpath(run_dir)), **tally(*flags, args.window)})
-    print(rows[-1], flush=True)
-  total = {k: sum(r[k] for r in rows) for k in rows[0] if k not in ("run", "riding_steps_mean")}
+    hits = collisions(*flags, args.window)
+    no_ride = [h for h in hits if not h["riding_in_window"]]
+    rows.append({"run": os.path.basename(os.path.normpath(run_dir)), **tally(*flags[:3], args.window),
+                 "collided_no_riding_box_near": sum(h["floor_box_m"] is not None and h["floor_box_m"] <= args.near
+                                                    for h in no_ride), "collisions": hits})
+    print({k: v for k, v in rows[-1].items() if k != "collisions"}, flush=True)
+  total = {k: sum(r[k] for r in rows) for k in rows[0] if k not in ("run", "riding_steps_mean", "collisions")}
   print("all", total, flush=True)
-  atomic.write_json(args.out, {**provenance(), "area": args.area, "window_steps": args.window, "all": total,
+  atomic.write_json(args.out, {**provenance(), "area": args.area, "window_steps": args.window, "near_m": args.near,
+                               "all": total,
                                "rows": rows})
   return 0
 
