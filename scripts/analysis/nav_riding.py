@@ -12,7 +12,7 @@ the nearest floor obstacle's footprint after the colliding step (m, 0 over it), 
 collisions without riding came within `--near` m of one.
 The batch is not the evaluation's program (and this CPU is not its GPU), so a trial's path may differ
 from the study's; the counts are samples of the same policy on the same layouts. Prints a line per run
-and writes JSON with the device, command and date. CPU: about 3 min per run of 100 trials (2 cores).
+and writes JSON with the device, command and date. CPU (2 cores): 8 min for five runs of 100 trials.
 
 python scripts/analysis/nav_riding.py RUN [RUN ...] [--area nav/zigzag] [--trials 100] [--window 4] [--near 1.0] \
     --out FILE
