@@ -2,11 +2,12 @@
 
 Each run's exported policy drives the evaluation's trials of a navigation area (train.evaluate's
 trials: the area's draw, reset keys from EVAL_SEED, eps EVAL_EPS, deterministic; the run as it was
-configured), all in one batch. At the start of every control step it reads whether a track belt rides
-on a floor obstacle (CollisionWatch.riding, the riding penalty's signal) and after it whether the robot
-collided; a trial ends at its first done step (goal, collision or tip-over). Per run and in all: the
-trials that rode at least once and those that never did, with how many of each collided, and of the
-collided trials how many rode in the `--window` control steps up to and including the colliding one;
+configured), all in one batch. At the end of every control step it reads whether a track belt rides
+on a floor obstacle (CollisionWatch.riding: what reward.riding_penalty charges, per step ending so)
+and whether the robot collided in it; a trial ends at its first done step (goal, collision or
+tip-over). Per run and in all: the trials that rode at least once and those that never did, with how
+many of each collided, and of the collided trials how many rode at the end of one of the `--window`
+control steps up to and including the colliding one;
 each collision's trial, step, whether it rode in that window, and how far the chassis centre was from
 the nearest floor obstacle's footprint after the colliding step (m, 0 over it), with how many of the
 collisions without riding came within `--near` m of one.
@@ -39,7 +40,7 @@ from scenes.navigation import WALL_OBSTACLES  # noqa: E402
 
 
 def rollout(run_dir: str, area: str, trials: int):
-  """(riding at each step's start, collided after it, done after it: each (max_steps, trials) of 0/1;
+  """(riding at each step's end, collided in it, done after it: each (max_steps, trials) of 0/1;
   the chassis' (x, y) after each step (max_steps, trials, 2) m; the trials' scenes)."""
   cfg = run_config(run_dir)
   core, draw = scene_env(cfg, area)
@@ -48,8 +49,8 @@ def rollout(run_dir: str, area: str, trials: int):
   start = trial_starts(core, trial_keys(trials, EVAL_SEED), EVAL_EPS, None, draw)
 
   def body(s, _):
-    riding = jax.vmap(lambda x: core.watch.riding(x.pipeline_state.data))(s)
     n = jax.vmap(core.step)(s, act(s.obs))
+    riding = jax.vmap(lambda x: core.watch.riding(x.pipeline_state.data))(n)
     xy = n.pipeline_state.data.xpos[:, core.sim.layout.chassis_body, :2]
     return n, (riding, n.pipeline_state.collided, n.done, xy)
   *flags, xy = jax.jit(lambda s: jax.lax.scan(body, s, None, length=cfg.episode.max_steps)[1])(start)
@@ -93,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
   p.add_argument("runs", nargs="+", help="run folders, each with policy/")
   p.add_argument("--area", default="nav/zigzag")
   p.add_argument("--trials", type=int, default=100)
-  p.add_argument("--window", type=int, default=4, help="control steps up to and including a collision's")
+  p.add_argument("--window", type=int, default=4, help="control steps up to and including a collision's (their ends)")
   p.add_argument("--near", type=float, default=1.0, help="m: a floor obstacle this near the chassis centre counts")
   p.add_argument("--out", required=True)
   args = p.parse_args(argv)
