@@ -57,32 +57,42 @@ def rollout(run_dir: str, area: str, trials: int):
   return (*(np.asarray(x) > 0 for x in flags), np.asarray(xy), jax.tree_util.tree_map(np.asarray, start.pipeline_state.scene))
 
 
+def live_steps(done: np.ndarray) -> np.ndarray:
+  """(steps, trials) bool: the steps up to and including each trial's first done step (all, where none)."""
+  steps = done.shape[0]
+  end = np.where(done.any(axis=0), done.argmax(axis=0), steps - 1)  # the last step of each episode
+  return np.arange(steps)[:, None] <= end[None, :]
+
+
+def rode_before(riding: np.ndarray, step: np.ndarray, window: int) -> np.ndarray:
+  """(trials,) bool: whether each trial rode at the end of one of the `window` steps up to and including
+  its `step`."""
+  return np.array([riding[max(0, f - window + 1): f + 1, k].any() for k, f in enumerate(step)], bool)
+
+
 def collisions(riding, collided, done, xy, scene, window: int) -> list[dict]:
   """Each trial's first collision within its episode: trial, step, riding in the window up to it, and the
   chassis centre's distance (m) from the nearest floor obstacle's footprint after that step (None: none)."""
+  hit = collided & live_steps(done)
+  first = hit.argmax(axis=0)
+  near = rode_before(riding, first, window)
+  floor = slice(WALL_OBSTACLES, None)
   rows = []
-  for k in range(collided.shape[1]):
-    end = int(done[:, k].argmax()) if done[:, k].any() else collided.shape[0] - 1
-    hits = np.flatnonzero(collided[: end + 1, k])
-    if hits.size:
-      f = int(hits[0])
-      floor = slice(WALL_OBSTACLES, None)
-      d = footprint_distance(xy[f, k][None], scene.box_pos[k, floor, :2][None], scene.box_size[k, floor, :2][None],
-                             scene.box_yaw[k, floor][None])[0]
-      rows.append({"trial": k, "step": f, "riding_in_window": bool(riding[max(0, f - window + 1): f + 1, k].any()),
-                   "floor_box_m": round(float(d.min()), 3) if d.size else None})
+  for k in np.flatnonzero(hit.any(axis=0)):
+    f = int(first[k])
+    d = footprint_distance(xy[f, k][None], scene.box_pos[k, floor, :2][None], scene.box_size[k, floor, :2][None],
+                           scene.box_yaw[k, floor][None])[0]
+    rows.append({"trial": int(k), "step": f, "riding_in_window": bool(near[k]),
+                 "floor_box_m": round(float(d.min()), 3) if d.size else None})
   return rows
 
 
 def tally(riding: np.ndarray, collided: np.ndarray, done: np.ndarray, window: int) -> dict:
   """Counts over the trials (columns), each cut at its first done step."""
-  steps = riding.shape[0]
-  end = np.where(done.any(axis=0), done.argmax(axis=0), steps - 1)  # the last step of each episode
-  live = np.arange(steps)[:, None] <= end[None, :]
+  live = live_steps(done)
   rode = (riding & live).any(axis=0)
   hit = (collided & live).any(axis=0)
-  first = collided.argmax(axis=0)
-  near = np.array([riding[max(0, f - window + 1): f + 1, k].any() for k, f in enumerate(first)])
+  near = rode_before(riding, (collided & live).argmax(axis=0), window)
   return {"trials": int(riding.shape[1]), "rode": int(rode.sum()), "rode_collided": int((rode & hit).sum()),
           "never_rode": int((~rode).sum()), "never_rode_collided": int((~rode & hit).sum()),
           "collided": int(hit.sum()), "collided_riding_in_window": int((hit & near).sum()),
