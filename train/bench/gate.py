@@ -3,9 +3,10 @@ against its tolerance, PASS or FAIL (the command exits 1 on a failure): flat-gro
 rate against the commanded ones, creep with the belts stopped on a 20-degree incline, the scripted
 stair controller of both robots up and down the paper's hardest staircase, robot 1's single-step
 limit (a step below the measured 0.275 m climbed, one far above it not), the contact culling along
-those drives (every contact the C engine finds touching is kept, mjx_tracks.sim.culling), and a passive fall
-stepped by MJX under the settings against MuJoCo's C engine under the default ones. A faster
-physics setting is adopted only if it passes.
+those drives (every contact the C engine finds touching is kept, mjx_tracks.sim.culling), a passive fall
+stepped by MJX under the settings against MuJoCo's C engine under the default ones, and no launch:
+full throttle into the hardest staircase (nominal and low belt friction) never lifts the chassis
+faster than its belts and speed can. A faster physics setting is adopted only if it passes.
 
     python -m train.bench gate --set physics.solver_iterations=2 --set physics.timestep=0.0125
 """
@@ -27,6 +28,11 @@ STEP_BELOW, STEP_ABOVE = 0.25, 0.35  # m, single steps below and far above robot
 DRIVE_SECONDS = 20.0  # s, each scripted drive
 FALL = dict(height=0.10, roll=0.25, seconds=1.5)  # m above resting, rad, s: the passive fall of the C-engine check
 REFERENCE_ITERATIONS = 50  # solver and line-search iterations of the C engine's reference fall: converged
+LAUNCH_SCENES = ("hardest", "hardest+friction-low")  # PAPER_TASK's evaluation scenes the launch check drives
+#   into: nominal belt friction and the robustness suite's low friction (x0.8)
+LAUNCH_TRIALS = 32  # full-throttle trials per scene (the evaluation's first 32: starts varied); under 3 solver
+#   iterations 15 of 100 (x1) and 41 of 100 (x0.8) launched, under 4 none (docs/benchmarks.md)
+GRAVITY = 9.81  # m/s^2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,6 +57,8 @@ def add_args(p) -> None:
   p.add_argument("--set", action="append", default=[], metavar="physics.KEY=VALUE",
                  help="physics settings to check (configs/defaults.yaml's physics section)")
   p.add_argument("--robots", default="1,2", help="robots whose stair drives are checked")
+  p.add_argument("--launch-trials", type=int, default=LAUNCH_TRIALS,
+                 help=f"full-throttle trials per scene of the launch check (default {LAUNCH_TRIALS})")
 
 
 def physics_of(overrides: list[str]):
@@ -244,9 +252,58 @@ def c_engine_check(physics) -> list[Check]:
           Check.at_most("fall vs C engine: roll / pitch", dang, 0.02, "rad")]
 
 
+def launch_bound(robot, period: float) -> float:
+  """The most a chassis can rise in one control period (m): its belts lift it at most max_speed x
+  period (straight up a wall), and a jump off its speed at most max_speed^2 / 2g higher."""
+  return robot.max_speed * period + robot.max_speed ** 2 / (2 * GRAVITY)
+
+
+def largest_rises(cfg, scene: str, trials: int) -> np.ndarray:
+  """Each trial's largest rise of the chassis in one control step (m) while its episode lasts, full
+  throttle (the `full` baseline) on evaluation scene `scene` of task cfg."""
+  import jax  # noqa: PLC0415
+
+  from mjx_tracks.baselines import baseline  # noqa: PLC0415
+  from train.evaluation import EVAL_EPS, scene_env, trial_keys, trial_starts  # noqa: PLC0415
+  env, draw = scene_env(cfg, scene)
+  act = baseline("full").make(env)
+
+  def rollout(keys):
+    def body(s, _):
+      after = jax.vmap(env.step)(s, act(s))
+      rise = after.pipeline_state.data.qpos[:, 2] - s.pipeline_state.data.qpos[:, 2]
+      return after, (rise, after.done)
+    _, (rise, done) = jax.lax.scan(body, trial_starts(env, keys, EVAL_EPS, None, draw), None,
+                                   length=cfg.episode.max_steps)
+    return rise, done
+
+  rise, done = (np.asarray(x) for x in jax.jit(rollout)(trial_keys(trials)))
+  lasting = np.cumsum(done, axis=0) - done < 1  # steps up to and including the one that ended the episode
+  return np.where(lasting, rise, 0.0).max(axis=0)
+
+
+def launch_check(physics, scenes=LAUNCH_SCENES, trials: int = LAUNCH_TRIALS) -> list[Check]:
+  """Full throttle into PAPER_TASK's hardest staircase (each of `scenes`): the chassis's largest
+  rise in one control step against launch_bound. A solver that has not converged throws the robot
+  up when it meets the first riser (3 Newton iterations: up to 1.29 m in 0.25 s)."""
+  from mjx_tracks.envs.config import load_config  # noqa: PLC0415
+  from mjx_tracks.robots import get_robot  # noqa: PLC0415
+  cfg = dataclasses.replace(load_config(PAPER_TASK), physics=physics)
+  bound = launch_bound(get_robot(cfg.robot), cfg.control.period)
+  out = []
+  for scene in scenes:
+    rises = largest_rises(cfg, scene, trials)
+    out.append(Check.at_most(f"largest rise in one control step, full throttle, {scene} "
+                             f"({int((rises > bound).sum())} of {trials} trials above)", float(rises.max()), bound, "m"))
+  return out
+
+
 def run(args) -> tuple[list[dict], dict]:
   physics = physics_of(args.set)
+  if args.launch_trials < 1:
+    raise BenchInputError(f"--launch-trials must be at least 1, got {args.launch_trials}")
   checks = flat_checks(physics) + incline_check(physics) + c_engine_check(physics)
+  checks += launch_check(physics, trials=args.launch_trials)
   for robot in args.robots.split(","):
     checks += stair_checks(physics, robot.strip())
   rows = [c.row() for c in checks]
