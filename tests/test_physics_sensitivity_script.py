@@ -22,11 +22,11 @@ def test_variants_take_physics_keys_only_under_new_names():
 
 
 def test_outcomes_and_pairing_count_each_trial():
-  # 4 trials: 0 succeeds, 1 tips over, 2 and 3 run out of time (3 goes furthest)
+  # 4 trials: 0 succeeds, 1 tips over, 2 collides, 3 runs out of time
   trials = {"success": [1.0, 0.0, 0.0, 0.0], "progress": [1.0, 0.2, 0.4, 0.8], "tipped_over": [0.0, 1.0, 0.0, 0.0],
-            "collided": [0.0] * 4, "length": [30.0, 10.0, 50.0, 50.0]}
+            "collided": [0.0, 0.0, 1.0, 0.0], "length": [30.0, 10.0, 50.0, 50.0]}
   got = outcomes(trials)
-  assert got == {"success": 0.25, "progress": 0.6, "tipped_over": 1, "timed_out": 2, "length": 35.0,
+  assert got == {"success": 0.25, "progress": 0.6, "tipped_over": 1, "collided": 1, "timed_out": 1, "length": 35.0,
                  "per_trial_success": [1, 0, 0, 0]}
   other = outcomes({**trials, "success": [0.0, 0.0, 1.0, 1.0]})
   assert paired(got, other) == {"gained": 2, "lost": 1}

@@ -3,7 +3,7 @@ evaluation scene's trials (train.evaluate's: the scene's draw, reset keys from E
 EVAL_EPS, deterministic) under the task's physics as configured and under each --variant of it
 (physics.* keys only: the solver's iterations, contact slots, timestep), the same trials under
 every setting. Per run (or baseline) and setting: success, progress, tip-overs, time-outs, mean
-episode length; trial by trial against the configured physics, the successes each setting
+episode length, collisions (navigation); trial by trial against the configured physics, the successes each setting
 gained and lost. A figure that moves with the solver's convergence is the solver's, not the
 policy's. Prints a line per row and writes JSON with the device, command and date.
 
@@ -57,6 +57,7 @@ def outcomes(per_trial: dict) -> dict:
   success = np.asarray(per_trial["success"]) > 0
   return {"success": round(float(success.mean()), 3), "progress": round(float(np.mean(per_trial["progress"])), 3),
           "tipped_over": int((np.asarray(per_trial["tipped_over"]) > 0).sum()),
+          "collided": int((np.asarray(per_trial["collided"]) > 0).sum()),
           "timed_out": int(timed_out(per_trial).sum()), "length": round(float(np.mean(per_trial["length"])), 1),
           "per_trial_success": success.astype(int).tolist()}
 
@@ -119,13 +120,15 @@ def main(argv: list[str] | None = None) -> int:
     row = {"policy": who, **{k: v[i] for k, v in got.items()},
            "paired": {k: paired(got[CONFIGURED][i], got[k][i]) for k in named}}
     rows.append(row)
-    brief = {k: {m: row[k][m] for m in ("success", "progress", "tipped_over", "timed_out", "length")} for k in settings}
+    brief = {k: {m: row[k][m] for m in ("success", "progress", "tipped_over", "collided", "timed_out", "length")}
+             for k in settings}
     print(who, args.scene, brief, row["paired"], flush=True)
   means = {k: round(float(np.mean([r[k]["success"] for r in rows])), 3) for k in settings}
-  print("mean success:", means)
+  collisions = {k: sum(r[k]["collided"] for r in rows) for k in settings}
+  print("mean success:", means, "collisions:", collisions)
   physics = {k: dataclasses.asdict(cfg.physics) for k, cfg in settings.items()}
   atomic.write_json(args.out, {**provenance(), "scene": args.scene, "trials": args.trials, "physics": physics,
-                               "mean_success": means, "rows": rows})
+                               "mean_success": means, "collisions": collisions, "rows": rows})
   return 0
 
 
