@@ -20,7 +20,6 @@ import dataclasses
 import os
 import sys
 
-import jax
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
@@ -29,7 +28,7 @@ from mjx_tracks.baselines import BASELINES, baseline  # noqa: E402
 from mjx_tracks.envs.config import from_dict, load_config  # noqa: E402
 from mjx_tracks.metrics import timed_out  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
-from train.evaluation import EVAL_EPS, EVAL_SEED, group_trial_runner, trial_runner  # noqa: E402
+from train.evaluation import EVAL_EPS, EVAL_SEED, trial_runner  # noqa: E402
 from nav_safety_filter import configured, shared_config  # noqa: E402  (scripts/analysis/nav_safety_filter.py)
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
 
@@ -80,10 +79,10 @@ def policy_runs(args, settings: dict):
       got[name] = [outcomes(run(None, args.scene)[0])]
     return got
   loaded = [load_policy_params(os.path.join(r, "policy")) for r in args.runs]
-  spec, params = loaded[0][0], jax.tree_util.tree_map(lambda *x: np.stack(x), *(pp for _, pp in loaded))
-  for name, cfg in settings.items():
-    run = group_trial_runner(cfg, args.scene, act_from_params(spec), args.trials, EVAL_EPS, EVAL_SEED)
-    got[name] = [outcomes(t) for t in run(params)]
+  for name, cfg in settings.items():  # one program per setting, the policies one after another (their
+    # rollouts vmapped over the policies, train.evaluation.group_trial_runner, hung on this 2-core CPU)
+    run = trial_runner(cfg, [args.scene], act_from_params(loaded[0][0]), args.trials, EVAL_EPS, EVAL_SEED)
+    got[name] = [outcomes(run(params, args.scene)[0]) for _, params in loaded]
   return got
 
 
