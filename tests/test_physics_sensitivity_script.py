@@ -9,6 +9,8 @@ import pytest
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "analysis"))
 from physics_sensitivity import main, outcomes, paired, variants  # noqa: E402
 
+OUT = "<out>"  # the report path each refused command names: tmp_path / "x", written by none of them
+
 
 def test_variants_take_physics_keys_only_under_new_names():
   got = variants(["a:physics.solver_iterations=4; physics.ls_iterations=6", "b:physics.timestep=0.005"])
@@ -33,15 +35,20 @@ def test_outcomes_and_pairing_count_each_trial():
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--scene", "hardest", "--variant", "a:physics.timestep=0.005", "--out", "x"], "give run folders"),
-    (["--baseline", "zero", "--scene", "hardest", "--variant", "a:physics.timestep=0.005", "--out", "x"], "give run folders"),
-    (["r", "--set", "episode.max_steps=9", "--scene", "hardest", "--variant", "a:physics.timestep=0.005", "--out", "x"],
+    (["--scene", "hardest", "--variant", "a:physics.timestep=0.005", "--out", OUT], "give run folders"),
+    (["--baseline", "zero", "--scene", "hardest", "--variant", "a:physics.timestep=0.005", "--out", OUT], "give run folders"),
+    (["r", "--set", "episode.max_steps=9", "--scene", "hardest", "--variant", "a:physics.timestep=0.005", "--out", OUT],
      "--set applies to a baseline"),
     (["--baseline", "zero", "--task", "asc-inc-cog", "--scene", "hardest", "--variant", "a:control.period=0.5",
-      "--out", "x"], "only physics.KEY=VALUE"),
+      "--out", OUT], "only physics.KEY=VALUE"),
     (["--baseline", "zero", "--task", "asc-inc-cog", "--scene", "hardest", "--variant", "a:physics.timestep=-1",
-      "--out", "x"], "physics.timestep")])
+      "--out", OUT], "physics.timestep"),
+    (["--baseline", "zero", "--task", "asc-inc-cog", "--scene", "hardest+no-such-case", "--variant",
+      "a:physics.timestep=0.005", "--out", OUT], "unknown robustness case"),
+    (["--baseline", "zero", "--task", "asc-inc-cog", "--scene", "hardest", "--variant", "a:physics.timestep=0.005",
+      "--trials", "0", "--out", OUT], "--trials must be at least 1")])
 def test_wrong_arguments_fail_with_one_line_naming_them(argv, words, tmp_path, capsys):
+  argv = [str(tmp_path / "x") if a == OUT else a for a in argv]
   with pytest.raises(SystemExit) as e:
     main(argv)
   assert e.value.code == 2

@@ -28,7 +28,7 @@ from mjx_tracks.baselines import BASELINES, baseline  # noqa: E402
 from mjx_tracks.envs.config import from_dict, load_config  # noqa: E402
 from mjx_tracks.metrics import timed_out  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
-from train.evaluation import EVAL_EPS, EVAL_SEED, trial_runner  # noqa: E402
+from train.evaluation import EVAL_EPS, EVAL_SEED, scene_config, trial_runner  # noqa: E402
 from nav_safety_filter import configured, shared_config  # noqa: E402  (scripts/analysis/nav_safety_filter.py)
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
 
@@ -79,6 +79,8 @@ def policy_runs(args, settings: dict):
       got[name] = [outcomes(run(None, args.scene)[0])]
     return got
   loaded = [load_policy_params(os.path.join(r, "policy")) for r in args.runs]
+  if any(spec != loaded[0][0] for spec, _ in loaded[1:]):
+    raise ValueError("the runs' networks differ; give runs of one group (seeds of one config)")
   for name, cfg in settings.items():  # one program per setting, the policies one after another (their
     # rollouts vmapped over the policies, train.evaluation.group_trial_runner, hung on this 2-core CPU)
     run = trial_runner(cfg, [args.scene], act_from_params(loaded[0][0]), args.trials, EVAL_EPS, EVAL_SEED)
@@ -101,6 +103,8 @@ def parse(argv):
     p.error("give run folders, or --baseline NAME with --task TASK")
   if args.set and not args.baseline:
     p.error("--set applies to a baseline's task (a run's task is what it trained on)")
+  if args.trials < 1:
+    p.error(f"--trials must be at least 1, got {args.trials}")
   return p, args
 
 
@@ -110,9 +114,11 @@ def main(argv: list[str] | None = None) -> int:
     named = variants(args.variant)
     raw = (load_config(args.task, tuple(args.set)) if args.baseline else from_dict(shared_config(args.runs))).to_dict()
     settings = {CONFIGURED: from_dict(raw), **{k: configured(raw, v) for k, v in named.items()}}
-    got = policy_runs(args, settings)
-  except (ValueError, FileNotFoundError) as e:  # ConfigError is a ValueError; so is an unknown scene
+    for cfg in settings.values():
+      scene_config(cfg, args.scene)  # an unknown scene, refused before anything runs
+  except (ValueError, FileNotFoundError) as e:  # ConfigError is a ValueError
     p.error(str(e))
+  got = policy_runs(args, settings)  # its errors are not the command line's
   names = [f"baseline-{args.baseline}"] if args.baseline else [os.path.basename(os.path.normpath(r)) for r in args.runs]
   rows = []
   for i, who in enumerate(names):

@@ -30,8 +30,8 @@ FALL = dict(height=0.10, roll=0.25, seconds=1.5)  # m above resting, rad, s: the
 REFERENCE_ITERATIONS = 50  # solver and line-search iterations of the C engine's reference fall: converged
 LAUNCH_SCENES = ("hardest", "hardest+friction-low")  # PAPER_TASK's evaluation scenes the launch check drives
 #   into: nominal belt friction and the robustness suite's low friction (x0.8)
-LAUNCH_TRIALS = 32  # full-throttle trials per scene (the evaluation's first 32: starts varied); under 3 solver
-#   iterations 6 (x1) and 17 (x0.8) of them launched, under 4 none (docs/benchmarks.md)
+LAUNCH_TRIALS = 32  # full-throttle trials per scene (the evaluation's first 32: starts varied); what 3 and 4
+#   solver iterations give: results/bench/gate/*.json, docs/benchmarks.md
 GRAVITY = 9.81  # m/s^2
 
 
@@ -285,7 +285,7 @@ def largest_rises(cfg, scene: str, trials: int) -> np.ndarray:
 def launch_check(physics, scenes=LAUNCH_SCENES, trials: int = LAUNCH_TRIALS) -> list[Check]:
   """Full throttle into PAPER_TASK's hardest staircase (each of `scenes`): the chassis's largest
   rise in one control step against launch_bound. A solver that has not converged throws the robot
-  up when it meets the first riser (3 Newton iterations: up to 0.87 m in 0.25 s, 32 trials at x0.8)."""
+  up when it meets the first riser (3 Newton iterations do: docs/benchmarks.md)."""
   from mjx_tracks.envs.config import load_config  # noqa: PLC0415
   from mjx_tracks.robots import get_robot  # noqa: PLC0415
   cfg = dataclasses.replace(load_config(PAPER_TASK), physics=physics)
