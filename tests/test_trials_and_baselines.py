@@ -80,3 +80,11 @@ def test_a_baseline_is_evaluated_and_recorded_like_a_run_and_its_trials_are_samp
   assert evaluate.main(["--baseline", "zero", "--task", "asc-inc-cog", "--db", db, out]) == 2  # another baseline's folder
   assert "not baseline zero" in capsys.readouterr().err
   assert evaluate.main(["--task", "asc-inc-cog", out]) == 2 and "--baseline NAME" in capsys.readouterr().err
+
+
+def test_live_steps_end_at_each_trials_first_done_and_run_to_the_end_without_one():
+  from train.evaluation import live_steps
+  # 4 steps, 3 trials (float flags as a rollout gives them): 0 ends at step 1 (and is flagged again
+  # at step 3), 1 never ends, 2 ends at step 0
+  done = np.array([[0, 0, 1], [1, 0, 0], [0, 0, 1], [1, 0, 0]], np.float32)
+  assert live_steps(done).astype(int).tolist() == [[1, 1, 1], [1, 1, 0], [0, 1, 0], [0, 1, 0]]

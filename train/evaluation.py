@@ -77,6 +77,15 @@ EVAL_SEED = 1  # their reset keys: jax.random.split(PRNGKey(EVAL_SEED), trials)
 EVAL_EPS = 1.0  # the difficulty handed to reset (pinned scenes such as hardest ignore it)
 
 
+def live_steps(done) -> np.ndarray:
+  """(steps, trials) bool of a rollout's per-step done flags (steps, trials): the steps up to and
+  including each trial's first done step (all, where none): the steps its episode lasted."""
+  done = np.asarray(done) > 0
+  steps = done.shape[0]
+  end = np.where(done.any(axis=0), done.argmax(axis=0), steps - 1)  # the last step of each episode
+  return np.arange(steps)[:, None] <= end[None, :]
+
+
 def start_sums(state, trials: int) -> dict:
   """Per-trial sums of a batch state before its first step: every METRICS sum and the length 0, the
   final chassis position the start."""

@@ -33,7 +33,7 @@ from mjx_tracks import atomic, compile_cache  # noqa: E402
 from mjx_tracks.envs.config import ConfigError  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from train.core.run_record import run_config  # noqa: E402
-from train.evaluation import EVAL_EPS, EVAL_SEED, scene_env, trial_keys, trial_starts  # noqa: E402
+from train.evaluation import EVAL_EPS, EVAL_SEED, live_steps, scene_env, trial_keys, trial_starts  # noqa: E402
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
 from nav_collision_sites import footprint_distance  # noqa: E402  (scripts/analysis/nav_collision_sites.py)
 from scenes.navigation import WALL_OBSTACLES  # noqa: E402
@@ -55,13 +55,6 @@ def rollout(run_dir: str, area: str, trials: int):
     return n, (riding, n.pipeline_state.collided, n.done, xy)
   *flags, xy = jax.jit(lambda s: jax.lax.scan(body, s, None, length=cfg.episode.max_steps)[1])(start)
   return (*(np.asarray(x) > 0 for x in flags), np.asarray(xy), jax.tree_util.tree_map(np.asarray, start.pipeline_state.scene))
-
-
-def live_steps(done: np.ndarray) -> np.ndarray:
-  """(steps, trials) bool: the steps up to and including each trial's first done step (all, where none)."""
-  steps = done.shape[0]
-  end = np.where(done.any(axis=0), done.argmax(axis=0), steps - 1)  # the last step of each episode
-  return np.arange(steps)[:, None] <= end[None, :]
 
 
 def rode_before(riding: np.ndarray, step: np.ndarray, window: int) -> np.ndarray:

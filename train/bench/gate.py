@@ -264,7 +264,7 @@ def largest_rises(cfg, scene: str, trials: int) -> np.ndarray:
   import jax  # noqa: PLC0415
 
   from mjx_tracks.baselines import baseline  # noqa: PLC0415
-  from train.evaluation import EVAL_EPS, scene_env, trial_keys, trial_starts  # noqa: PLC0415
+  from train.evaluation import EVAL_EPS, live_steps, scene_env, trial_keys, trial_starts  # noqa: PLC0415
   env, draw = scene_env(cfg, scene)
   act = baseline("full").make(env)
 
@@ -277,9 +277,8 @@ def largest_rises(cfg, scene: str, trials: int) -> np.ndarray:
                                    length=cfg.episode.max_steps)
     return rise, done
 
-  rise, done = (np.asarray(x) for x in jax.jit(rollout)(trial_keys(trials)))
-  lasting = np.cumsum(done, axis=0) - done < 1  # steps up to and including the one that ended the episode
-  return np.where(lasting, rise, 0.0).max(axis=0)
+  rise, done = jax.jit(rollout)(trial_keys(trials))
+  return np.where(live_steps(done), np.asarray(rise), 0.0).max(axis=0)
 
 
 def launch_check(physics, scenes=LAUNCH_SCENES, trials: int = LAUNCH_TRIALS) -> list[Check]:
