@@ -36,7 +36,8 @@ from mjx_tracks.sim.pose import chassis_rpy  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from mjx_tracks.envs.config import ConfigError  # noqa: E402
 from train.core.run_record import run_config  # noqa: E402
-from nav_safety_filter import configured, variants  # noqa: E402  (scripts/analysis/nav_safety_filter.py)
+from nav_safety_filter import variants  # noqa: E402  (scripts/analysis/nav_safety_filter.py)
+from variants import configured  # noqa: E402  (scripts/analysis/variants.py)
 from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, scene_env, trial_keys, trial_starts  # noqa: E402
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import functools
 import os
 import sys
 
@@ -25,12 +24,12 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 from mjx_tracks import atomic, compile_cache  # noqa: E402
-from mjx_tracks.envs.config import apply_override, from_dict  # noqa: E402
+from mjx_tracks.envs.config import from_dict  # noqa: E402
 from mjx_tracks.metrics import timed_out  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
-from train.core.run_record import read_run_record  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, group_trial_runner  # noqa: E402
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
+from variants import configured, parse_variants, shared_config  # noqa: E402  (scripts/analysis/variants.py)
 
 ON = "control.safety_filter.enabled=true"
 AS_TRAINED = "as trained"
@@ -38,30 +37,10 @@ PREFIX = "control.safety_filter."
 
 
 def variants(specs: list[str]) -> dict[str, list[str]]:
-  """{name: overrides} of "NAME:KEY=VALUE;KEY=VALUE" specs (ValueError on another key or a repeated name)."""
-  out = {}
-  for spec in specs or ["filter on:"]:
-    name, sep, sets = spec.partition(":")
-    items = [x.strip() for x in sets.split(";") if x.strip()]
-    if not sep or not name.strip() or name.strip() in out or name.strip() == AS_TRAINED:
-      raise ValueError(f"--variant {spec!r}: NAME:KEY=VALUE;... with a new name")
-    if any(not x.startswith(PREFIX) for x in items):
-      raise ValueError(f"--variant {spec!r}: only {PREFIX}KEY=VALUE (the policies' task is what they trained on)")
-    out[name.strip()] = [ON, *items]
-  return out
-
-
-def configured(raw: dict, overrides: list[str]):
-  """The TaskConfig of a full config mapping `raw` with KEY=VALUE overrides (ConfigError names a bad one)."""
-  return from_dict(functools.reduce(apply_override, overrides, raw))
-
-
-def shared_config(runs: list[str]) -> dict:
-  """The runs' recorded config (ValueError where they differ but for the seed)."""
-  configs = [read_run_record(r)["config"] for r in runs]
-  if any(c != configs[0] for c in configs[1:]):
-    raise ValueError("the runs were configured differently; give runs of one group (seeds of one config)")
-  return configs[0]
+  """{name: overrides} of "NAME:KEY=VALUE;KEY=VALUE" specs, the filter on in each (default: one,
+  "filter on", as configured; ValueError on another key or a repeated name)."""
+  parsed = parse_variants(specs or ["filter on:"], PREFIX, AS_TRAINED, empty_ok=True)
+  return {name: [ON, *items] for name, items in parsed.items()}
 
 
 def outcomes(per_trial: dict) -> dict:

@@ -29,7 +29,7 @@ from mjx_tracks.envs.config import from_dict, load_config  # noqa: E402
 from mjx_tracks.metrics import timed_out  # noqa: E402
 from train.core.policy import act_from_params, load_policy_params  # noqa: E402
 from train.evaluation import EVAL_EPS, EVAL_SEED, scene_config, trial_runner  # noqa: E402
-from nav_safety_filter import configured, shared_config  # noqa: E402  (scripts/analysis/nav_safety_filter.py)
+from variants import configured, parse_variants, shared_config  # noqa: E402  (scripts/analysis/variants.py)
 from provenance import provenance  # noqa: E402  (scripts/analysis/provenance.py)
 
 CONFIGURED = "configured"  # the task's physics as the run recorded it (or the baseline's task has it)
@@ -39,16 +39,7 @@ PREFIX = "physics."
 def variants(specs: list[str]) -> dict[str, list[str]]:
   """{name: overrides} of "NAME:physics.KEY=VALUE;..." specs (ValueError on another key, no key or
   a repeated name)."""
-  out = {}
-  for spec in specs:
-    name, sep, sets = spec.partition(":")
-    name, items = name.strip(), [x.strip() for x in sets.split(";") if x.strip()]
-    if not sep or not name or name in out or name == CONFIGURED or not items:
-      raise ValueError(f"--variant {spec!r}: NAME:physics.KEY=VALUE;... with a new name")
-    if any(not x.startswith(PREFIX) for x in items):
-      raise ValueError(f"--variant {spec!r}: only {PREFIX}KEY=VALUE (the policies' task is what they trained on)")
-    out[name] = items
-  return out
+  return parse_variants(specs, PREFIX, CONFIGURED, empty_ok=False)
 
 
 def outcomes(per_trial: dict) -> dict:
