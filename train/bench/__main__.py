@@ -1,17 +1,19 @@
 """`python -m train.bench NAME [options] [--out FILE]`: run one benchmark (NAME: env, physics,
-scaling, ablate, time-to-solve, baselines, speeds, gate (exits 1 if a physics oracle fails), gym, group; `python -m train.bench NAME --help` for its options) and write its
-rows, with device, command and date, to FILE (default results/bench/NAME-<device kind>.json)."""
+scaling, ablate, time-to-solve, baselines, speeds, gate (exits 1 if a physics oracle fails),
+contacts (exits 1 if a scene kind touches more contacts than the slots keep), gym, group; `python -m
+train.bench NAME --help` for its options) and write its rows, with device, command and date, to FILE
+(default results/bench/NAME-<device kind>.json)."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 
-from train.bench import ablate, baselines, env, gate, group, gym, physics, scaling, speeds, time_to_solve
+from train.bench import ablate, baselines, contacts, env, gate, group, gym, physics, scaling, speeds, time_to_solve
 from train.bench.result import BenchInputError, default_path, write_result
 
 BENCHES = {"env": env, "physics": physics, "scaling": scaling, "ablate": ablate, "time-to-solve": time_to_solve,
-           "baselines": baselines, "speeds": speeds, "gate": gate, "gym": gym, "group": group}
+           "baselines": baselines, "speeds": speeds, "gate": gate, "contacts": contacts, "gym": gym, "group": group}
 
 
 def parser() -> argparse.ArgumentParser:
