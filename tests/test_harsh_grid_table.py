@@ -24,6 +24,9 @@ def test_seeds_group_into_one_row_per_case_with_the_iqm_of_their_middle_three(tm
     _report(tmp_path, f"ppo_s{seed}", f"ppo-{seed}", "ppo", "friction-0.7", s)
     _report(tmp_path, f"ppo_s{seed}", f"ppo-{seed}", "ppo", "mass-minus-30", 1.0)
   _report(tmp_path, "full-asc-inc-cog", "asc-inc-cog-baseline-full-3067ac", "baseline", "friction-0.7", 0.0)
+  (tmp_path / "full-asc-inc-cog" / "run.json").write_text(json.dumps(
+      {"run_id": "asc-inc-cog-baseline-full-3067ac", "task": "asc-inc-cog", "algo": "baseline", "preset": "full",
+       "config": {}}))
   reports = read_reports(str(tmp_path))
   assert sorted(reports) == [("asc-inc-cog", "baseline-full", "friction-0.7"), ("asc-inc-cog", "ppo", "friction-0.7"),
                              ("asc-inc-cog", "ppo", "mass-minus-30")]

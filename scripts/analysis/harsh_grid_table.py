@@ -23,13 +23,14 @@ PREFIX = "eval-hardest+"
 
 def read_reports(folder: str) -> dict[tuple[str, str, str], list[dict]]:
   """{(task, policy kind, case): [report, ...]}: a trained run's kind is its algorithm, a baseline's
-  `baseline-NAME` (from its run id); one report per run folder and case."""
+  `baseline-NAME` (its run record's preset is the baseline's name); one report per run folder and case."""
+  from train.core.run_record import read_run_record  # noqa: PLC0415
   out = collections.defaultdict(list)
   for path in sorted(glob.glob(os.path.join(folder, "*", PREFIX + "*.json"))):
     r = json.load(open(path))
     kind = r["algo"]
     if kind == "baseline":
-      kind = "baseline-" + r["run_id"].split("-baseline-")[1].rsplit("-", 1)[0]
+      kind = "baseline-" + read_run_record(os.path.dirname(path))["preset"]
     out[(r["task"], kind, r["scene"][len("hardest+"):])].append(r)
   if not out:
     raise ValueError(f"no {PREFIX}CASE.json reports in the folders of {folder}")

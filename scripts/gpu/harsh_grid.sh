@@ -4,7 +4,9 @@
 # baseline of each task given with TASKS) evaluated in its own process, all side by side, each run's
 # policy copied to $OUT/harsh/NAME and its reports written beside it (eval-hardest+CASE.json), all
 # packed into $OUT/harsh.tgz at the end (policies left out). TRIALS (default 100). SCENES (default:
-# every case below) picks cases by name, e.g. SCENES="friction-0.7 mass-minus-30". Afterwards: python scripts/analysis/harsh_grid_table.py DIR (the table).
+# every case below) picks cases by name, e.g. SCENES="friction-0.7 mass-minus-30". PARALLEL: the
+# most processes at once (default all). Runs on a CPU too. The table afterwards:
+# python scripts/analysis/harsh_grid_table.py $OUT/harsh --json FILE
 # Usage: [TRIALS=100] [TASKS="asc-inc-cog"] [SCENES=...] [PARALLEL=N] bash scripts/gpu/harsh_grid.sh RUN [RUN ...]
 set -uo pipefail
 export XLA_PYTHON_CLIENT_PREALLOCATE=false  # many processes on one GPU
@@ -17,7 +19,7 @@ cases="[{name: friction-0.7, set: [$(f 0.7)]}, {name: friction-0.6, set: [$(f 0.
 names=(${SCENES:-friction-0.7 friction-0.6 mass-minus-30 mass-plus-40 noise-x4 camera-up-10})
 scenes=(); for n in "${names[@]}"; do scenes+=(--scene "hardest+$n"); done
 out=${OUT:-/tmp}/harsh; mkdir -p "$out"
-slot() { while [ "$(jobs -rp | wc -l)" -ge "${PARALLEL:-99}" ]; do sleep 2; done; }  # PARALLEL: most processes at once
+slot() { while [ "$(jobs -rp | wc -l)" -ge "${PARALLEL:-99}" ]; do sleep 2; done; }
 for run in "$@"; do
   slot
   name=$(basename "$run"); mkdir -p "$out/$name"; cp -r "$run/run.json" "$run/policy" "$out/$name/"  # reports beside it
