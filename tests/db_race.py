@@ -15,8 +15,8 @@ from train.db import ExperimentDB  # noqa: E402  (imported once, before the proc
 
 
 def _open(path, run_id, barrier, results):
-  barrier.wait()
   try:
+    barrier.wait(timeout=60)
     ExperimentDB(path).start(run_id, "asc-inc-cog", "ppo", "cpu", 0, {}, "/x", 1)
     results.put("ok")
   except Exception as e:  # noqa: BLE001  (reported, not raised, so that the parent counts it)
@@ -28,13 +28,17 @@ def main(folder: str, rounds: int, processes: int) -> dict:
   failed = []
   for i in range(rounds):
     barrier, results = ctx.Barrier(processes), ctx.Queue()
-    procs = [ctx.Process(target=_open, args=(os.path.join(folder, f"db{i}.sqlite"), f"r{k}", barrier, results))
-             for k in range(processes)]
-    for p in procs:
-      p.start()
-    failed += [r for r in (results.get(timeout=120) for _ in procs) if r != "ok"]
-    for p in procs:
-      p.join()
+    procs = [ctx.Process(target=_open, args=(os.path.join(folder, f"db{i}.sqlite"), f"r{k}", barrier, results),
+                         daemon=True) for k in range(processes)]
+    try:
+      for p in procs:
+        p.start()
+      failed += [r for r in (results.get(timeout=120) for _ in procs) if r != "ok"]
+    finally:
+      for p in procs:
+        p.join(timeout=10)
+        if p.is_alive():
+          p.terminate()
   return {"failed": failed, "runs_in_first": len(ExperimentDB(os.path.join(folder, "db0.sqlite")).runs())}
 
 

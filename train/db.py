@@ -115,8 +115,7 @@ def _write_ahead_log(c: sqlite3.Connection) -> None:
   """The file in WAL mode (kept in the file, so set once). Switching needs the file to itself, and
   SQLite answers "database is locked" at once, without its busy timeout, while another process is
   opening the same new file: processes started together on one new database (a study's evaluations,
-  scripts/gpu/harsh_grid.sh) crashed there: 12 of 480 openings, eight processes at a time on each of
-  60 new files, on a 2-core CPU (tests/test_db.py). Retried for up to WAL_TRIES x WAL_WAIT s."""
+  scripts/gpu/harsh_grid.sh) crashed there (how often: tests/test_db.py). Retried for up to WAL_TRIES x WAL_WAIT s."""
   for attempt in range(WAL_TRIES):
     try:
       if c.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":

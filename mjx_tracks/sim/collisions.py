@@ -55,24 +55,24 @@ class CollisionWatch:
   def colliding(self, d) -> jax.Array:
     """(contacts,) bool: which contacts of the step just taken are collisions (their geom pairs:
     mjx_private.contacts(d).geom)."""
-    g1, g2, penetrating = _penetrating(d)
+    g1, g2, touching = penetrating(d)
     robot, belt = jnp.asarray(self.robot), jnp.asarray(self.belt)
     forbidden, belts_only = jnp.asarray(self.forbidden), jnp.asarray(self.belts_only)
 
     def hits(world, part):
       return robot[part] & (forbidden[world] | (belts_only[world] & ~belt[part]))
 
-    return penetrating & (hits(g1, g2) | hits(g2, g1))
+    return touching & (hits(g1, g2) | hits(g2, g1))
 
   def riding(self, d) -> jax.Array:
     """() bool: whether a belt touches a `belts_only` geom (a floor obstacle under the tracks) in the
     contacts of the step just taken."""
-    g1, g2, penetrating = _penetrating(d)
+    g1, g2, touching = penetrating(d)
     belt, belts_only = jnp.asarray(self.belt), jnp.asarray(self.belts_only)
-    return jnp.any(penetrating & ((belts_only[g1] & belt[g2]) | (belts_only[g2] & belt[g1])))
+    return jnp.any(touching & ((belts_only[g1] & belt[g2]) | (belts_only[g2] & belt[g1])))
 
 
-def _penetrating(d) -> tuple[jax.Array, jax.Array, jax.Array]:
+def penetrating(d) -> tuple[jax.Array, jax.Array, jax.Array]:
   """(geom 1, geom 2, whether they penetrate) of each contact of the step just taken: the contacts the
   solver acts on (dist - includemargin < 0)."""
   c = mjx_private.contacts(d)

@@ -14,6 +14,7 @@ import datetime
 import glob
 import json
 import os
+import shlex
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -22,15 +23,14 @@ PREFIX = "eval-hardest+"
 
 
 def read_reports(folder: str) -> dict[tuple[str, str, str], list[dict]]:
-  """{(task, policy kind, case): [report, ...]}: a trained run's kind is its algorithm, a baseline's
+  """{(task, policy kind, case): [report, ...]}: a trained run's kind is ALGO/PRESET, a baseline's
   `baseline-NAME` (its run record's preset is the baseline's name); one report per run folder and case."""
   from train.core.run_record import read_run_record  # noqa: PLC0415
   out = collections.defaultdict(list)
   for path in sorted(glob.glob(os.path.join(folder, "*", PREFIX + "*.json"))):
     r = json.load(open(path))
-    kind = r["algo"]
-    if kind == "baseline":
-      kind = "baseline-" + read_run_record(os.path.dirname(path))["preset"]
+    preset = read_run_record(os.path.dirname(path))["preset"]
+    kind = f"baseline-{preset}" if r["algo"] == "baseline" else f"{r['algo']}/{preset}"
     out[(r["task"], kind, r["scene"][len("hardest+"):])].append(r)
   if not out:
     raise ValueError(f"no {PREFIX}CASE.json reports in the folders of {folder}")
@@ -73,7 +73,8 @@ def main(argv=None) -> int:
   print(markdown(rows))
   if args.json:
     with open(args.json, "w") as f:
-      json.dump({"command": "python scripts/analysis/harsh_grid_table.py " + " ".join(argv or sys.argv[1:]),
+      given = [a for a in (argv or sys.argv[1:]) if a != args.made_by and a != "--made-by"]
+      json.dump({"command": "python scripts/analysis/harsh_grid_table.py " + shlex.join(given),
                  "made_by": args.made_by, "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                  "rows": rows}, f, indent=1)
   return 0

@@ -20,19 +20,23 @@ names=(${SCENES:-friction-0.7 friction-0.6 mass-minus-30 mass-plus-40 noise-x4 c
 scenes=(); for n in "${names[@]}"; do scenes+=(--scene "hardest+$n"); done
 out=${OUT:-/tmp}/harsh; mkdir -p "$out"
 slot() { while [ "$(jobs -rp | wc -l)" -ge "${PARALLEL:-99}" ]; do sleep 2; done; }
+pids=()
 for run in "$@"; do
   slot
   name=$(basename "$run"); mkdir -p "$out/$name"; cp -r "$run/run.json" "$run/policy" "$out/$name/"  # reports beside it
   python3 -m train.evaluate "$out/$name" --trials "${TRIALS:-100}" --set "evaluation.robustness=$cases" "${scenes[@]}" \
     --db "$out/$name/eval.sqlite" >"$out/$name/log.txt" 2>&1 &
+  pids+=($!)
 done
 for task in ${TASKS:-}; do
   slot
   mkdir -p "$out/full-$task"
   python3 -m train.evaluate "$out/full-$task" --baseline full --task "$task" --trials "${TRIALS:-100}" \
     --set "evaluation.robustness=$cases" "${scenes[@]}" >"$out/full-$task/log.txt" 2>&1 &
+  pids+=($!)
 done
-wait
+failed=0; for p in "${pids[@]}"; do wait "$p" || failed=$((failed + 1)); done
 for d in "$out"/*/; do echo "$(basename "$d"): $(ls "$d" | grep -c '^eval-hardest+') reports; $(tail -1 "$d/log.txt")"; done
 # what comes back from the device is at most 8 files, each named in letters, digits, '.', '_', '-': one archive
 (cd "$out/.." && tar czf harsh.tgz --exclude=policy harsh)
+[ "$failed" -eq 0 ] || { echo "error: $failed evaluations failed (their log.txt)" >&2; exit 1; }

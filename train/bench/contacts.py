@@ -3,7 +3,7 @@ physics.contact_slots (the contacts MJX keeps per robot and substep, least dista
 task's hardest scene (`uniform` where its kind has none: navigation) is driven with every contact
 kept (contact_slots and box_pairs -1), half of the trials at full throttle and half with random
 actions (the `full` and `random` baselines), for one episode; a contact touches when the solver
-acts on it (distance - margin < 0, mjx_tracks.sim.collisions). The figure is sampled at the end of
+acts on it (distance - margin < 0, mjx_tracks.sim.collisions.penetrating). The figure is sampled at the end of
 each control step (the last of its physics substeps). A task passes when its most touching
 contacts fit the configured slots; the gate (`python -m train.bench gate`) checks the same against
 MuJoCo's C engine along the stair drives.
@@ -23,8 +23,9 @@ TRIALS = 32  # per task: the first half at full throttle, the rest random
 
 
 def add_args(p) -> None:
-  from mjx_tracks.tools.rollout_digest import TASKS  # noqa: PLC0415  (one task per scene kind)
-  p.add_argument("--tasks", nargs="+", default=list(TASKS), help="tasks to drive (default: one per scene kind)")
+  from mjx_tracks.tools.rollout_digest import TASKS  # noqa: PLC0415  (each stair direction, terrain kind, nav task)
+  p.add_argument("--tasks", nargs="+", default=list(TASKS),
+                 help="tasks to drive (default: the rollout digest's, one per stair direction, terrain kind and nav task)")
   p.add_argument("--scene", help="evaluation scene of every task (default: each task's hardest, else uniform)")
   p.add_argument("--trials", type=int, default=TRIALS, help=f"trials per task, even (default {TRIALS})")
   p.add_argument("--set", action="append", default=[], metavar="physics.KEY=VALUE",
@@ -38,7 +39,7 @@ def touching_counts(cfg, scene: str, trials: int) -> tuple[np.ndarray, np.ndarra
   import jax.numpy as jnp  # noqa: PLC0415
 
   from mjx_tracks.baselines import baseline  # noqa: PLC0415
-  from mjx_tracks.sim import mjx_private  # noqa: PLC0415
+  from mjx_tracks.sim.collisions import penetrating  # noqa: PLC0415
   from train.evaluation import EVAL_EPS, live_steps, scene_env, trial_keys, trial_starts  # noqa: PLC0415
   every = dataclasses.replace(cfg, physics=dataclasses.replace(cfg.physics, contact_slots=-1, box_pairs=-1))
   env, draw = scene_env(every, scene)
@@ -48,8 +49,8 @@ def touching_counts(cfg, scene: str, trials: int) -> tuple[np.ndarray, np.ndarra
   def rollout(keys):
     def body(s, _):
       after = jax.vmap(env.step)(s, jnp.where(throttle[:, None], full(s), rand(s)))
-      c = jax.vmap(mjx_private.contacts)(after.pipeline_state.data)
-      return after, ((c.dist - c.includemargin < 0).sum(-1), after.done)
+      touching = jax.vmap(lambda d: penetrating(d)[2])(after.pipeline_state.data)
+      return after, (touching.sum(-1), after.done)
     _, (count, done) = jax.lax.scan(body, trial_starts(env, keys, EVAL_EPS, None, draw), None,
                                     length=cfg.episode.max_steps)
     return count, done
@@ -60,9 +61,9 @@ def touching_counts(cfg, scene: str, trials: int) -> tuple[np.ndarray, np.ndarra
 
 
 def default_scene(cfg) -> str:
-  """The task's hardest scene, or uniform where its kind has no hardest configuration."""
+  """The scene the task's in-training probe drives (its hardest where it has one), else uniform."""
   from scenes.kinds import scene_kind  # noqa: PLC0415
-  return "hardest" if scene_kind(cfg.scene.kind).has_hardest(cfg.scene) else "uniform"
+  return scene_kind(cfg.scene.kind).probe_scene(cfg.scene) or "uniform"
 
 
 def run(args) -> tuple[list[dict], dict]:
@@ -71,18 +72,17 @@ def run(args) -> tuple[list[dict], dict]:
     raise BenchInputError(f"--trials must be even and at least 2, got {args.trials}")
   if any(not o.startswith("physics.") for o in args.set):
     raise BenchInputError("--set takes physics settings only (physics.KEY=VALUE)")
+  from train.evaluation import scene_config  # noqa: PLC0415
   try:
     configs = {task: load_config(task, tuple(args.set)) for task in args.tasks}
+    for task, cfg in configs.items():  # every scene checked before anything compiles
+      scene_config(cfg, args.scene or default_scene(cfg))
   except (ConfigError, KeyError, ValueError) as e:
     raise BenchInputError(str(e)) from None
   rows = []
   for task, cfg in configs.items():
     slots, scene = cfg.physics.contact_slots, args.scene or default_scene(cfg)
-    try:
-      counts = touching_counts(cfg, scene, args.trials)
-    except ConfigError as e:  # a scene the task does not have
-      raise BenchInputError(f"{task}: {e}") from None
-    for name, most in zip(("full", "random"), counts):
+    for name, most in zip(("full", "random"), touching_counts(cfg, scene, args.trials)):
       ok = slots < 0 or int(most.max()) <= slots
       rows.append({"task": task, "kind": cfg.scene.kind, "robot": cfg.robot, "baseline": name, "scene": scene,
                    "trials": len(most), "most_touching": int(most.max()), "median_trial_most": float(np.median(most)),
