@@ -86,6 +86,27 @@ def live_steps(done) -> np.ndarray:
   return np.arange(steps)[:, None] <= end[None, :]
 
 
+def largest_per_trial(cfg: TaskConfig, scene: str, make_act, measure, trials: int) -> np.ndarray:
+  """(trials,): each trial's largest measure(state before, state after) (batched) over the control
+  steps its episode lasts (0 where larger), on evaluation scene `scene` of task cfg, the actions of
+  make_act(env)(states), for cfg.episode.max_steps steps; the evaluation's own trials (trial_keys,
+  trial_starts). The physics checks of train.bench (the gate's launch check, contacts) measure with it."""
+  import jax  # noqa: PLC0415
+  env, draw = scene_env(cfg, scene)
+  act = make_act(env)
+
+  def rollout(keys):
+    def body(s, _):
+      after = jax.vmap(env.step)(s, act(s))
+      return after, (measure(s, after), after.done)
+    _, (value, done) = jax.lax.scan(body, trial_starts(env, keys, EVAL_EPS, None, draw), None,
+                                    length=cfg.episode.max_steps)
+    return value, done
+
+  value, done = jax.jit(rollout)(trial_keys(trials))
+  return np.where(live_steps(done), np.asarray(value), 0).max(axis=0)
+
+
 def start_sums(state, trials: int) -> dict:
   """Per-trial sums of a batch state before its first step: every METRICS sum and the length 0, the
   final chassis position the start."""

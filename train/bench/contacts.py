@@ -40,23 +40,17 @@ def touching_counts(cfg, scene: str, trials: int) -> tuple[np.ndarray, np.ndarra
 
   from mjx_tracks.baselines import baseline  # noqa: PLC0415
   from mjx_tracks.sim.collisions import penetrating  # noqa: PLC0415
-  from train.evaluation import EVAL_EPS, live_steps, scene_env, trial_keys, trial_starts  # noqa: PLC0415
+  from train.evaluation import largest_per_trial  # noqa: PLC0415
   every = dataclasses.replace(cfg, physics=dataclasses.replace(cfg.physics, contact_slots=-1, box_pairs=-1))
-  env, draw = scene_env(every, scene)
-  full, rand = baseline("full").make(env), baseline("random").make(env)
   throttle = jnp.arange(trials) < trials // 2
 
-  def rollout(keys):
-    def body(s, _):
-      after = jax.vmap(env.step)(s, jnp.where(throttle[:, None], full(s), rand(s)))
-      touching = jax.vmap(lambda d: penetrating(d)[2])(after.pipeline_state.data)
-      return after, (touching.sum(-1), after.done)
-    _, (count, done) = jax.lax.scan(body, trial_starts(env, keys, EVAL_EPS, None, draw), None,
-                                    length=cfg.episode.max_steps)
-    return count, done
+  def make_act(env):
+    full, rand = baseline("full").make(env), baseline("random").make(env)
+    return lambda s: jnp.where(throttle[:, None], full(s), rand(s))
 
-  count, done = jax.jit(rollout)(trial_keys(trials))
-  most = np.where(live_steps(done), np.asarray(count), 0).max(axis=0)
+  def touching(before, after):
+    return jax.vmap(lambda d: penetrating(d)[2])(after.pipeline_state.data).sum(-1)
+  most = largest_per_trial(every, scene, make_act, touching, trials)
   return most[:trials // 2], most[trials // 2:]
 
 
@@ -75,13 +69,14 @@ def run(args) -> tuple[list[dict], dict]:
   from train.evaluation import scene_config  # noqa: PLC0415
   try:
     configs = {task: load_config(task, tuple(args.set)) for task in args.tasks}
+    scenes = {task: args.scene or default_scene(cfg) for task, cfg in configs.items()}
     for task, cfg in configs.items():  # every scene checked before anything compiles
-      scene_config(cfg, args.scene or default_scene(cfg))
+      scene_config(cfg, scenes[task])
   except (ConfigError, KeyError, ValueError) as e:
     raise BenchInputError(str(e)) from None
   rows = []
   for task, cfg in configs.items():
-    slots, scene = cfg.physics.contact_slots, args.scene or default_scene(cfg)
+    slots, scene = cfg.physics.contact_slots, scenes[task]
     for name, most in zip(("full", "random"), touching_counts(cfg, scene, args.trials)):
       ok = slots < 0 or int(most.max()) <= slots
       rows.append({"task": task, "kind": cfg.scene.kind, "robot": cfg.robot, "baseline": name, "scene": scene,

@@ -261,24 +261,12 @@ def launch_bound(robot, period: float) -> float:
 def largest_rises(cfg, scene: str, trials: int) -> np.ndarray:
   """Each trial's largest rise of the chassis in one control step (m) while its episode lasts, full
   throttle (the `full` baseline) on evaluation scene `scene` of task cfg."""
-  import jax  # noqa: PLC0415
-
   from mjx_tracks.baselines import baseline  # noqa: PLC0415
-  from train.evaluation import EVAL_EPS, live_steps, scene_env, trial_keys, trial_starts  # noqa: PLC0415
-  env, draw = scene_env(cfg, scene)
-  act = baseline("full").make(env)
+  from train.evaluation import largest_per_trial  # noqa: PLC0415
 
-  def rollout(keys):
-    def body(s, _):
-      after = jax.vmap(env.step)(s, act(s))
-      rise = after.pipeline_state.data.qpos[:, 2] - s.pipeline_state.data.qpos[:, 2]
-      return after, (rise, after.done)
-    _, (rise, done) = jax.lax.scan(body, trial_starts(env, keys, EVAL_EPS, None, draw), None,
-                                   length=cfg.episode.max_steps)
-    return rise, done
-
-  rise, done = jax.jit(rollout)(trial_keys(trials))
-  return np.where(live_steps(done), np.asarray(rise), 0.0).max(axis=0)
+  def rise(before, after):
+    return after.pipeline_state.data.qpos[:, 2] - before.pipeline_state.data.qpos[:, 2]
+  return largest_per_trial(cfg, scene, baseline("full").make, rise, trials)
 
 
 def launch_check(physics, scenes=LAUNCH_SCENES, trials: int = LAUNCH_TRIALS) -> list[Check]:
