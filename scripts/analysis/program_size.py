@@ -1,8 +1,8 @@
 """How large the programs inside the PPO training step are, by part (issue 30, compile time):
 StableHLO operations and text size of a task's environment step (one robot), its physics substeps
-(`TrackedRobotEnv._advance`), its sensors, the auto-reset's `reset_at`, and the batched step with
-the auto-reset (8 robots), each lowered with `jax.jit(...).lower` (tracing and lowering only,
-nothing compiled). CPU, a few seconds.
+(`TrackedRobotEnv._advance`), its sensors, the auto-reset's `reset_at`, the batched step with
+the auto-reset (8 robots) and the whole PPO training step (`gpu` preset), each lowered with
+`jax.jit(...).lower` (tracing and lowering only, nothing compiled). CPU, under a minute.
 
     python scripts/analysis/program_size.py [--task asc-inc-cog]
 """
@@ -13,6 +13,7 @@ import argparse
 import collections
 import re
 import sys
+import tempfile
 import time
 
 import jax
@@ -36,8 +37,9 @@ def size(name: str, f, *args) -> None:
 def main() -> None:
   p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   p.add_argument("--task", default="asc-inc-cog")
+  task = p.parse_args().task
   try:
-    env = TrackedRobotEnv(load_config(p.parse_args().task))
+    env = TrackedRobotEnv(load_config(task))
   except ConfigError as e:
     sys.exit(f"error: {e}")
   key = jax.random.PRNGKey(0)
@@ -52,6 +54,18 @@ def main() -> None:
   batched = batched_env(env)
   size("batched step with auto-reset (8 robots)", batched.step, batched.reset(jax.random.split(key, 8)),
        jnp.zeros((8, env.action_size)))
+  size_update(task)
+
+
+def size_update(task: str) -> None:
+  """The whole PPO training step of `train.run --task TASK --preset gpu` (4,096 robots: rollout, SGD
+  epochs), lowered for the state's shapes: what "compiled in N s" compiles."""
+  from train import run  # noqa: PLC0415
+  from train.core.build import build, shaped_state  # noqa: PLC0415
+  from train.core.plan import plan_run  # noqa: PLC0415
+  with tempfile.TemporaryDirectory() as scratch:  # the plan's run folder is never made
+    t = build(plan_run(run.parser().parse_args(["--task", task, "--preset", "gpu", "--out", f"{scratch}/run"])))
+  size("PPO training step (gpu preset, 4,096 robots)", t.learner.update, shaped_state(t))
 
 
 if __name__ == "__main__":
