@@ -4,7 +4,7 @@ StableHLO operations and text size of a task's environment step (one robot), its
 the auto-reset (8 robots) and the whole PPO training step (`gpu` preset), each lowered with
 `jax.jit(...).lower` (tracing and lowering only, nothing compiled). CPU, under a minute.
 
-    python scripts/analysis/program_size.py [--task asc-inc-cog]
+    python scripts/analysis/program_size.py [--task asc-inc-cog] [--set KEY=VALUE ...]
 """
 
 from __future__ import annotations
@@ -37,9 +37,10 @@ def size(name: str, f, *args) -> None:
 def main() -> None:
   p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   p.add_argument("--task", default="asc-inc-cog")
-  task = p.parse_args().task
+  p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a config setting, repeatable")
+  args = p.parse_args()
   try:
-    env = TrackedRobotEnv(load_config(task))
+    env = TrackedRobotEnv(load_config(args.task, tuple(args.set)))
   except ConfigError as e:
     sys.exit(f"error: {e}")
   key = jax.random.PRNGKey(0)
@@ -54,17 +55,18 @@ def main() -> None:
   batched = batched_env(env)
   size("batched step with auto-reset (8 robots)", batched.step, batched.reset(jax.random.split(key, 8)),
        jnp.zeros((8, env.action_size)))
-  size_update(task)
+  size_update(args.task, args.set)
 
 
-def size_update(task: str) -> None:
-  """The whole PPO training step of `train.run --task TASK --preset gpu` (4,096 robots: rollout, SGD
-  epochs), lowered for the state's shapes: what "compiled in N s" compiles."""
+def size_update(task: str, settings: list[str]) -> None:
+  """The whole PPO training step of `train.run --task TASK --preset gpu --set ...` (4,096 robots:
+  rollout, SGD epochs), lowered for the state's shapes: what "compiled in N s" compiles."""
   from train import run  # noqa: PLC0415
   from train.core.build import build, shaped_state  # noqa: PLC0415
   from train.core.plan import plan_run  # noqa: PLC0415
   with tempfile.TemporaryDirectory() as scratch:  # the plan's run folder is never made
-    t = build(plan_run(run.parser().parse_args(["--task", task, "--preset", "gpu", "--out", f"{scratch}/run"])))
+    argv = ["--task", task, "--preset", "gpu", "--out", f"{scratch}/run", *(a for s in settings for a in ("--set", s))]
+    t = build(plan_run(run.parser().parse_args(argv)))
   size("PPO training step (gpu preset, 4,096 robots)", t.learner.update, shaped_state(t))
 
 
