@@ -17,7 +17,7 @@ from train.study.executor import STUDY_DB, StudyRunner, cell_folder_of, read_cel
 from train.study.merge import main as merge_main, merge
 from train.study.report import final_table, report_text
 from train.study.results import load_results
-from train.study.spec import study_from_dict
+from train.study.spec import load_study, study_from_dict
 
 FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
 COMMANDS = ((FAKE, "train"), (FAKE, "evaluate"))  # after the worker's Python
@@ -124,3 +124,35 @@ def test_a_folder_of_another_study_is_refused(finished, tmp_path, capsys):
   assert merge_main([finished, other]) == 2
   assert "holds study 'other'" in capsys.readouterr().err
   assert merge_main([finished, str(tmp_path / "nothing")]) == 2
+
+
+def test_a_src_that_ran_new_groups_alone_adds_them_and_their_runs_to_dest(finished, tmp_path, capsys):
+  """`python -m train.study NAME --set 'groups=[...]'` run elsewhere (new groups, no baselines): its
+  groups join DEST's study.yaml beside DEST's own, their runs come, DEST's runs stay as they were;
+  a group of one name that differs between the two is refused in one line, DEST unchanged."""
+  import yaml
+  src = str(tmp_path / "new" / "m")
+  new_group = {"name": "h", "algo": "ppo", "preset": "cpu", "steps": [100], "backend": "cpu"}
+  with Client(processes=False, n_workers=1, threads_per_worker=2, resources={"cpu": 2}, dashboard_address=":0") as c:
+    counts = StudyRunner(study_from_dict({**STUDY, "groups": [new_group], "baselines": []}), src, c, COMMANDS,
+                         backends=("cpu",)).run()
+  assert counts["done"] == 4
+  dest = str(tmp_path / "dest")
+  shutil.copytree(finished, dest)
+  before = read_cells(dest)
+  assert sorted(merge(dest, src)) == sorted(read_cells(src)) and all(cid.startswith("h/") for cid in read_cells(src))
+  spec = load_study(os.path.join(dest, "study.yaml"))
+  assert [g.name for g in spec.groups] == ["g", "h"] and spec.baselines == ("zero",)
+  now = read_cells(dest)
+  assert {cid: now[cid] for cid in before} == before and all(now[cid]["status"] == "done" for cid in read_cells(src))
+  rows = final_table(load_results(dest))
+  assert sum(r.startswith("| h |") for r in rows) == 2 and sum(r.startswith("| g |") for r in rows) == 2
+  other = str(tmp_path / "other")
+  shutil.copytree(src, other)
+  changed = {**STUDY, "groups": [{**STUDY["groups"][0], "steps": [300]}, new_group], "baselines": []}
+  yaml.safe_dump(changed, open(os.path.join(other, "study.yaml"), "w"), sort_keys=False)
+  fresh = str(tmp_path / "fresh")
+  shutil.copytree(finished, fresh)
+  assert merge_main([fresh, other]) == 2
+  assert "group 'g' differs" in capsys.readouterr().err
+  assert load_study(os.path.join(fresh, "study.yaml")) == load_study(os.path.join(finished, "study.yaml"))

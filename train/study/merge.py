@@ -3,11 +3,16 @@ study (its runs made on other machines, or the study continued elsewhere) into D
 in SRC and not in DEST (or marked done there without its run folder: a folder that came back without
 its ignored files) brings its run folder, its database rows, its attempts (after DEST's own, each once when SRC
 continued from a copy of DEST). A study that grew in SRC (its study.yaml lists every run of DEST's and
-more: tasks or seeds added) gives DEST its study.yaml, and its new runs come too."""
+more: tasks or seeds added) gives DEST its study.yaml, and its new runs come too. A SRC that ran new
+groups of the study alone (`python -m train.study NAME --set 'groups=[...]'`, with the same tasks, seeds
+and evaluation) adds those groups (and any baselines it adds) to DEST's study.yaml, and their runs come
+too; a group of one name must be the same in both."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 import os
 import shutil
 import sys
@@ -15,8 +20,8 @@ import sys
 from train.db import ExperimentDB
 from train.core.run_record import run_id_in
 from train.study.executor import STATE, STUDY_DB, StudyState, cell_folder_of, read_cells
-from train.study.results import SPEC_FILE
-from train.study.spec import cells, load_study
+from train.study.results import SPEC_FILE, write_spec
+from train.study.spec import StudySpec, cells, load_study, study_from_dict
 
 
 def _study_name(folder: str) -> str:
@@ -45,11 +50,34 @@ def _merge_cell(dest: str, src: str, name: str, cid: str, dest_cells: dict, src_
   dest_cells[cid] = {"status": "done", "attempts": base + src_cells[cid]["attempts"]}
 
 
+SHARED = ("tasks", "seeds", "eval_trials", "robustness")  # what runs of new groups must share with DEST's
+
+
+def with_new_groups(dest: StudySpec, src: StudySpec) -> StudySpec:
+  """DEST's spec with SRC's groups and baselines that DEST lacks; ValueError, naming the field, where
+  they do not share SHARED or a group of one name differs."""
+  for field in SHARED:
+    if getattr(src, field) != getattr(dest, field):
+      raise ValueError(f"{field} differs ({getattr(src, field)} in SRC, {getattr(dest, field)} in DEST): new "
+                       "groups merge only from a run of the same tasks, seeds and evaluation")
+  ours = {g.name: g for g in dest.groups}
+  for g in src.groups:
+    if g.name in ours and ours[g.name] != g:
+      raise ValueError(f"group {g.name!r} differs between the two study.yaml files")
+  merged = dataclasses.replace(dest, groups=dest.groups + tuple(g for g in src.groups if g.name not in ours),
+                               baselines=dest.baselines + tuple(b for b in src.baselines if b not in dest.baselines))
+  return study_from_dict(json.loads(json.dumps(dataclasses.asdict(merged))))  # validated: e.g. the runs' limit
+
+
 def _adopt_a_grown_spec(dest: str, src: str) -> None:
-  """DEST takes SRC's study.yaml when that lists every run of DEST's and more."""
-  ids = lambda folder: {c.id for c in cells(load_study(os.path.join(folder, SPEC_FILE)))}  # noqa: E731
-  if ids(src) > ids(dest):
+  """DEST takes SRC's study.yaml when that lists every run of DEST's and more; else SRC's new groups
+  and baselines, where it has runs DEST's does not list (with_new_groups)."""
+  specs = [load_study(os.path.join(folder, SPEC_FILE)) for folder in (dest, src)]
+  ids_dest, ids_src = ({c.id for c in cells(spec)} for spec in specs)
+  if ids_src > ids_dest:
     shutil.copyfile(os.path.join(src, SPEC_FILE), os.path.join(dest, SPEC_FILE))
+  elif ids_src - ids_dest:
+    write_spec(dest, with_new_groups(*specs))
 
 
 def merge(dest: str, src: str) -> list[str]:
