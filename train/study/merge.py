@@ -17,6 +17,7 @@ import os
 import shutil
 import sys
 
+from mjx_tracks.envs.config import show
 from train.db import ExperimentDB
 from train.core.run_record import run_id_in
 from train.study.executor import STATE, STUDY_DB, StudyState, cell_folder_of, read_cells
@@ -58,8 +59,8 @@ def with_new_groups(dest: StudySpec, src: StudySpec) -> StudySpec:
   they do not share SHARED or a group of one name differs."""
   for field in SHARED:
     if getattr(src, field) != getattr(dest, field):
-      raise ValueError(f"{field} differs ({getattr(src, field)} in SRC, {getattr(dest, field)} in DEST): new "
-                       "groups merge only from a run of the same tasks, seeds and evaluation")
+      raise ValueError(f"{field} is {show(getattr(src, field))} in SRC but {show(getattr(dest, field))} in DEST: "
+                       "new groups merge only from a run of the same tasks, seeds and evaluation")
   ours = {g.name: g for g in dest.groups}
   for g in src.groups:
     if g.name in ours and ours[g.name] != g:
