@@ -29,13 +29,17 @@ NO_FOLDER = "g/asc-uni-cog/200/s0"  # done in DEST, but its run folder and rows 
 STOPPED = {"started": 1.0, "ended": None, "rc": None, "stopped": True, "error": "the study stopped"}
 
 
+def _run_study(spec: dict, folder: str) -> dict:
+  """The study run in `folder` by the study runner (the stand-in train.run) on a local cluster; its counts."""
+  with Client(processes=False, n_workers=1, threads_per_worker=2, resources={"cpu": 2}, dashboard_address=":0") as c:
+    return StudyRunner(study_from_dict(spec), folder, c, COMMANDS, backends=("cpu",)).run()
+
+
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory) -> str:
-  """The whole study run in one folder by the study runner (the stand-in train.run)."""
+  """The whole study run in one folder."""
   folder = str(tmp_path_factory.mktemp("full") / "m")
-  with Client(processes=False, n_workers=1, threads_per_worker=2, resources={"cpu": 2}, dashboard_address=":0") as c:
-    counts = StudyRunner(study_from_dict(STUDY), folder, c, COMMANDS, backends=("cpu",)).run()
-  assert counts["done"] == 4 + 2  # and the zero baseline on each task
+  assert _run_study(STUDY, folder)["done"] == 4 + 2  # and the zero baseline on each task
   return folder
 
 
@@ -133,10 +137,7 @@ def test_a_src_that_ran_new_groups_alone_adds_them_and_their_runs_to_dest(finish
   import yaml
   src = str(tmp_path / "new" / "m")
   new_group = {"name": "h", "algo": "ppo", "preset": "cpu", "steps": [100], "backend": "cpu"}
-  with Client(processes=False, n_workers=1, threads_per_worker=2, resources={"cpu": 2}, dashboard_address=":0") as c:
-    counts = StudyRunner(study_from_dict({**STUDY, "groups": [new_group], "baselines": []}), src, c, COMMANDS,
-                         backends=("cpu",)).run()
-  assert counts["done"] == 4
+  assert _run_study({**STUDY, "groups": [new_group], "baselines": []}, src)["done"] == 4
   dest = str(tmp_path / "dest")
   shutil.copytree(finished, dest)
   before = read_cells(dest)

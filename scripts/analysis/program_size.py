@@ -13,7 +13,6 @@ import argparse
 import collections
 import re
 import sys
-import tempfile
 import time
 
 import jax
@@ -64,9 +63,8 @@ def size_update(task: str, settings: list[str]) -> None:
   from train import run  # noqa: PLC0415
   from train.core.build import build, shaped_state  # noqa: PLC0415
   from train.core.plan import plan_run  # noqa: PLC0415
-  with tempfile.TemporaryDirectory() as scratch:  # the plan's run folder is never made
-    argv = ["--task", task, "--preset", "gpu", "--out", f"{scratch}/run", *(a for s in settings for a in ("--set", s))]
-    t = build(plan_run(run.parser().parse_args(argv)))
+  argv = ["--task", task, "--preset", "gpu", *(a for s in settings for a in ("--set", s))]
+  t = build(plan_run(run.parser().parse_args(argv)))  # its run folder is named, never made
   size("PPO training step (gpu preset, 4,096 robots)", t.learner.update, shaped_state(t))
 
 

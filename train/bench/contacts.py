@@ -56,8 +56,7 @@ def touching_counts(cfg, scene: str, trials: int) -> tuple[np.ndarray, np.ndarra
 
 def default_scene(cfg) -> str:
   """The scene the task's in-training probe drives (its hardest where it has one), else uniform."""
-  from scenes.kinds import scene_kind  # noqa: PLC0415
-  return scene_kind(cfg.scene.kind).probe_scene(cfg.scene) or "uniform"
+  return cfg.scene.probe_scene or "uniform"
 
 
 def run(args) -> tuple[list[dict], dict]:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import os
 import shutil
 import sys
@@ -21,7 +20,7 @@ from mjx_tracks.envs.config import show
 from train.db import ExperimentDB
 from train.core.run_record import run_id_in
 from train.study.executor import STATE, STUDY_DB, StudyState, cell_folder_of, read_cells
-from train.study.results import SPEC_FILE, write_spec
+from train.study.results import SPEC_FILE, spec_data, write_spec
 from train.study.spec import StudySpec, cells, load_study, study_from_dict
 
 
@@ -67,7 +66,7 @@ def with_new_groups(dest: StudySpec, src: StudySpec) -> StudySpec:
       raise ValueError(f"group {g.name!r} differs between the two study.yaml files")
   merged = dataclasses.replace(dest, groups=dest.groups + tuple(g for g in src.groups if g.name not in ours),
                                baselines=dest.baselines + tuple(b for b in src.baselines if b not in dest.baselines))
-  return study_from_dict(json.loads(json.dumps(dataclasses.asdict(merged))))  # validated: e.g. the runs' limit
+  return study_from_dict(spec_data(merged))  # validated: e.g. the runs' limit
 
 
 def _adopt_a_grown_spec(dest: str, src: str) -> None:

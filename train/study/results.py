@@ -101,12 +101,16 @@ class StudyResults:
     return out
 
 
+def spec_data(spec: StudySpec) -> dict:
+  """The spec as plain data (tuples -> lists), as study.yaml holds it and study_from_dict reads it."""
+  return json.loads(json.dumps(dataclasses.asdict(spec)))
+
+
 def write_spec(folder: str, spec: StudySpec) -> None:
   """STUDY/study.yaml: the spec the study runs, so that `report` and `status` need only the folder."""
   import yaml  # noqa: PLC0415
-  raw = json.loads(json.dumps(dataclasses.asdict(spec)))  # tuples -> lists
   with open(os.path.join(folder, SPEC_FILE), "w") as f:
-    yaml.safe_dump(raw, f, sort_keys=False)
+    yaml.safe_dump(spec_data(spec), f, sort_keys=False)
 
 
 def load_results(folder: str) -> StudyResults:
