@@ -84,6 +84,7 @@ class Draw:
   high: jax.Array  # (k,) xi_max
   uniform: jax.Array  # () bool: the uniform sampler, else the incremental one
   kinds: jax.Array | None = None  # (K,) bool: the sub-kinds (terrain kinds, areas) an episode may draw; None: all
+  ascent: jax.Array | None = None  # () bool: a staircase climbed, else descended; None: the generator's own direction
 
 
 def as_draw(r: Ranges, sampler: str, kinds=None) -> Draw:

@@ -131,6 +131,15 @@ def stair_ranges(tread: tuple[float, float], riser: tuple[float, float],
                 hard=STAIR_HARD)
 
 
+def stair_ends(stairs: Staircase, up: bool | jax.Array):
+  """((spawn, yaw), goal, ahead) of an ascent if up else a descent; up may be data (a traced bool:
+  both computed, one picked), e.g. a draw's direction (runs of both directions in one program)."""
+  ascent, descent = (ascent_spawn(stairs), ascent_goal(stairs), 1.0), (descent_spawn(stairs), descent_goal(stairs), -1.0)
+  if isinstance(up, bool):
+    return ascent if up else descent
+  return jax.tree_util.tree_map(lambda a, d: jnp.where(up, a, d), ascent, descent)
+
+
 SPAWN_Y = 0.75  # m, random spawn / goal lateral offset ~ U(-0.75, 0.75)
 SPAWN_YAW = jnp.pi / 2  # rad, random spawn yaw offset ~ U(-pi/2, pi/2)
 
@@ -187,11 +196,9 @@ class StairScene:
     xi = samplers.sample(k_xi, eps, self.ranges, self.sampler, self.variant, draw)
     st = self.stairs(xi)
     pos, size = step_boxes(st, self.n_boxes)
-    up = self.direction == "up"
-    spawn, yaw = ascent_spawn(st) if up else descent_spawn(st)
-    goal = ascent_goal(st) if up else descent_goal(st)
-    spawn, yaw, goal = randomized_ends(k_ends, spawn, yaw, goal, 1.0 if up else -1.0, self.random_spawn,
-                                       self.random_goal)
+    up = self.direction == "up" if draw is None or draw.ascent is None else draw.ascent
+    (spawn, yaw), goal, ahead = stair_ends(st, up)
+    spawn, yaw, goal = randomized_ends(k_ends, spawn, yaw, goal, ahead, self.random_spawn, self.random_goal)
     # the goal is a line across the staircase (the stair modes cannot steer nor observe lateral
     # drift); a random goal is a point with a random lateral offset, for modes that steer
     halfwidth = jnp.float32(0.0 if self.random_goal else GOAL_HALFWIDTH)

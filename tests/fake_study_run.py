@@ -1,7 +1,7 @@
 """A stand-in for `train.run` / `train.evaluate` in study tests (no JAX): `train ARGS` makes a run
 folder with a checkpoint every 100 steps (0.1 s each) and records the run and one statistics row per
-checkpoint in its database (with --seeds S,S,..., one folder OUT/s<seed> per seed, side by side; each
-run.json lists its sessions' seeds under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
+checkpoint in its database (with --seeds S,S,..., one folder OUT/s<seed> per seed, with --tasks T,T,...
+OUT/<task>/s<seed>, side by side; each run.json lists its sessions' seeds (and tasks) under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
 scene of fake_success() and writes eval-hardest.json (with --baseline NAME --task TASK, first a run
 record of its own). FAKE_CRASH_SEED: that seed's first session
 exits 1 after its checkpoint at FAKE_CRASH_STEP (default 100); FAKE_EARLY_SEED: that seed's run stops
@@ -27,16 +27,17 @@ def fake_success(task: str, seed: int, budget: int, trial: int) -> int:
   return int(trial % 4 < min(per4, 4))
 
 
-def _begin(a, out: str, seed: str, db: ExperimentDB) -> dict:
+def _begin(a, out: str, seed: str, task: str, db: ExperimentDB) -> dict:
   """A run's record (new, or read to resume), its session counted and its start recorded."""
   meta_path = os.path.join(out, "run.json")
   if a.resume:
     meta = json.load(open(meta_path))
   else:
-    meta = {"run_id": f"{a.task}-s{seed}-{time.time_ns()}", "task": a.task, "seed": int(seed),
+    meta = {"run_id": f"{task}-s{seed}-{time.time_ns()}", "task": task, "seed": int(seed),
             "steps": int(a.steps), "total_steps": int(a.steps), "sessions": 0, "milestones": [int(m) for m in (a.milestones or "").split(",") if m]}
   meta["sessions"] += 1
-  meta.setdefault("programs", []).append(a.seeds or str(meta["seed"]))  # the seeds each session trained in one process
+  # the seeds (and tasks) each session trained in one process
+  meta.setdefault("programs", []).append(a.seeds + (f" x {a.tasks}" if a.tasks else "") if a.seeds else str(meta["seed"]))
   db.start(meta["run_id"], meta["task"], "ppo", "cpu", meta["seed"], {}, out, meta["steps"])
   os.makedirs(os.path.join(out, "checkpoints"), exist_ok=True)
   json.dump(meta, open(meta_path, "w"))
@@ -71,16 +72,23 @@ def _goes_on(meta: dict, step: int) -> bool:
 
 
 def train(argv: list[str]) -> int:
-  """One run (--seed), or several side by side in OUT/s<seed> (--seeds S,S,...) with one database."""
+  """One run (--seed), or several side by side in OUT/s<seed> (--seeds S,S,...; with --tasks T,T,...
+  OUT/<task>/s<seed>) with one database."""
   p = argparse.ArgumentParser()
-  for name in ("--task", "--algo", "--preset", "--steps", "--seed", "--seeds", "--out", "--db", "--resume",
+  for name in ("--task", "--tasks", "--algo", "--preset", "--steps", "--seed", "--seeds", "--out", "--db", "--resume",
                "--early-stop", "--milestones"):
     p.add_argument(name)
   p.add_argument("--set", action="append", default=[])
   a = p.parse_args(argv)
   db = ExperimentDB(a.db)
-  runs = [(os.path.join(a.out, f"s{s}"), s) for s in a.seeds.split(",")] if a.seeds else [(a.resume or a.out, a.seed)]
-  metas = [(_begin(a, out, seed, db), out) for out, seed in runs]
+  if a.resume:
+    runs = [(a.resume, a.seed, json.load(open(os.path.join(a.resume, "run.json")))["task"])]
+  elif a.seeds:
+    tasks = a.tasks.split(",") if a.tasks else [a.task]
+    runs = [(os.path.join(a.out, *([t] if a.tasks else []), f"s{s}"), s, t) for t in tasks for s in a.seeds.split(",")]
+  else:
+    runs = [(a.out, a.seed, a.task)]
+  metas = [(_begin(a, out, seed, task, db), out) for out, seed, task in runs]
 
   def interrupted(*_):
     for meta, _ in metas:

@@ -276,6 +276,52 @@ def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_ow
   assert starts[1] < ends[0]  # the two packs ran at once
 
 
+def test_a_pack_of_tasks_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):
+  """pack_tasks: the packs of seeds of a group's tasks that one program can take as data (here the
+  sampler) are one train.run --tasks ... --seeds ... process; each run comes back in its own
+  folder with its own records and evaluation."""
+  study = {**STUDY, "baselines": [], "compare": [], "groups": [{**STUDY["groups"][0], "steps": [200],
+                                                                "pack_seeds": True, "pack_tasks": True}]}
+  spec, folder = study_from_dict(study), str(tmp_path / "study")
+  with local_cluster(_workers(tmp_path, slow="", FAKE_CRASH_SEED="")) as cluster, Client(cluster) as client:
+    counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=io.StringIO()).run()
+  assert counts == {"done": 4, "running": 0, "queued": 0, "failed": 0}
+  state = json.load(open(os.path.join(folder, "state.json")))["cells"]
+  db = ExperimentDB(os.path.join(folder, STUDY_DB))
+  for c in cells(spec):
+    meta = json.load(open(os.path.join(cell_folder(folder, c), "run.json")))
+    assert state[c.id]["attempts"][0]["pack"] == [f"g/{t}/200/s{s}" for t in spec.tasks for s in (0, 1)]
+    assert (meta["task"], meta["seed"], meta["programs"]) == (c.task, c.seed, ["0,1 x asc-inc-cog,asc-uni-cog"])
+    own = ExperimentDB(os.path.join(cell_folder(folder, c), "run.sqlite")).runs()
+    assert [r["run_id"] for r in own] == [meta["run_id"]]
+    trials = [e for e in db.evals(meta["run_id"]) if e["scene"] == "hardest"]
+    assert sum(e["success"] for e in trials) == sum(fake_success(c.task, c.seed, 200, i) for i in range(4))
+
+
+def test_packs_join_across_tasks_only_where_one_program_takes_their_differences_as_data():
+  """A pack_tasks group: tasks whose configs differ in data only (sampler, stair direction, reward
+  kind) join one pack per set of fresh seeds; a task of another scene kind packs its seeds alone;
+  without pack_tasks each task packs its own seeds."""
+  from train.study.spec import pack_args, pack_folders, packs_of
+  group = {**STUDY["groups"][0], "steps": [200], "pack_seeds": True, "pack_tasks": True}
+  spec = study_from_dict({**STUDY, "tasks": ["asc-inc-cog", "des-uni-ang", "nav"], "baselines": [], "compare": [],
+                          "groups": [group]})
+  packs = packs_of(cells(spec))
+  assert [[c.id for c in p] for p in packs] == [
+      [f"g/{t}/200/s{s}" for t in ("asc-inc-cog", "des-uni-ang") for s in (0, 1)], ["g/nav/200/s0", "g/nav/200/s1"]]
+  args = pack_args(packs[0])
+  assert args[args.index("--tasks") + 1] == "asc-inc-cog,des-uni-ang" and args[args.index("--seeds") + 1] == "0,1"
+  assert "--task" not in args and "--task" in pack_args(packs[1]) and "--tasks" not in pack_args(packs[1])
+  assert pack_folders(packs[0]) == ["asc-inc-cog/s0", "asc-inc-cog/s1", "des-uni-ang/s0", "des-uni-ang/s1"]
+  assert pack_folders(packs[1]) == ["s0", "s1"]
+  partial = [c for c in cells(spec) if c.id != "g/des-uni-ang/200/s1"]  # des-uni-ang's seeds differ: not joined
+  assert [len(p) for p in packs_of(partial)] == [2, 2]
+  alone = study_from_dict({**STUDY, "baselines": [], "compare": [], "groups": [{**group, "pack_tasks": False}]})
+  assert [len(p) for p in packs_of(cells(alone))] == [2, 2]
+  with pytest.raises(ConfigError, match=r"groups\[0\]\.pack_tasks"):
+    study_from_dict({**STUDY, "groups": [{**group, "pack_seeds": False}]})
+
+
 def test_seeds_are_packed_only_for_this_projects_trainer():
   bad = {**STUDY, "groups": [{**STUDY["groups"][0], "budgets": "runs", "library": "sb3", "pack_seeds": True}]}
   with pytest.raises(ConfigError, match=r"groups\[0\]\.pack_seeds"):

@@ -234,15 +234,28 @@ def trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps
   return run
 
 
-def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps: float, seed: int):
+def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps: float, seed: int,
+                       configs: list[TaskConfig] | None = None):
   """run(params with a leading run axis) -> [per-trial figures of each run]: trial_runner's trials
   on `scene` for several policies of one network in one program (the rollout vmapped over the
-  policies: the runs of one `train.run --seeds` program probed at once)."""
+  policies: the runs of one `train.run --seeds` program probed at once). configs: each run's task
+  where the runs' tasks differ (mjx_tracks.envs.task_data): each run's trials are then those of
+  `scene` of its own task (its stair direction, its reward's safety term)."""
   import jax  # noqa: PLC0415
+
+  from mjx_tracks.envs.task_data import stacked, task_data  # noqa: PLC0415
   keys = trial_keys(trials, seed)
   core, draw = scene_env(cfg0, scene)
-  _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core)
-  compiled = jax.jit(jax.vmap(lambda params, draw: rollout(params, keys, None, draw)[0], in_axes=(0, None)))
+  if configs is None:
+    _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core)
+    compiled = jax.jit(jax.vmap(lambda params, draw: rollout(params, keys, None, draw)[0], in_axes=(0, None)))
+  else:  # each run's task: its scene's config in the program of cfg0's (scene_programs)
+    draw = stacked([task_data(scene_config(c, scene), core.cfg) for c in configs])
+
+    def each(params, task):
+      _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core.for_task(task))
+      return rollout(params, keys, None, task.draw)[0]
+    compiled = jax.jit(jax.vmap(each))
 
   def run(params) -> list[dict]:
     acc = compiled(params, draw)

@@ -49,6 +49,10 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--seeds", metavar="S,S,...",
                  help="several runs that differ only in their seed, trained as one vmapped program on one "
                       "device, each a run of its own (folder OUT/s<seed>, records, early stop, --resume)")
+  p.add_argument("--tasks", metavar="T,T,...",
+                 help="instead of --task, with --seeds: each task with each seed, all in one program, where the "
+                      "tasks differ only in what it takes as data (stair direction, sampler, reward kind: "
+                      "mjx_tracks/envs/task_data.py), each run in OUT/<task>/s<seed>")
   p.add_argument("--out", help="run directory (default runs/<run id>)")
   p.add_argument("--db", help="experiment database (default: experiments.sqlite beside the run directory)")
   p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -123,7 +127,8 @@ def _train(plan: RunPlan, args) -> int:
 
 
 def group_plans(args) -> list[RunPlan]:
-  """One plan per seed of --seeds (each folder OUT/s<seed>; without --out, runs/<its run id>)."""
+  """One plan per task of --tasks (or --task) and seed of --seeds (each folder OUT/s<seed>, with
+  --tasks OUT/<task>/s<seed>; without --out, runs/<its run id>)."""
   bad = [flag for flag, given in (("--seed", args.seed is not None), ("--resume", args.resume),
                                   ("--coordinator", args.coordinator),
                                   ("--library " + str(args.library), args.library not in (None, DEFAULT_LIBRARY)))
@@ -134,11 +139,29 @@ def group_plans(args) -> list[RunPlan]:
     seeds = [int(x) for x in args.seeds.split(",")]
   except ValueError:
     raise RunError(f"--seeds takes whole numbers separated by commas, e.g. 0,1,2; got {args.seeds!r}") from None
-  if len(set(seeds)) != len(seeds) or len(seeds) < 2:
-    raise RunError(f"--seeds needs at least two different seeds; got {args.seeds!r}")
-  return [plan_run(argparse.Namespace(**{**vars(args), "seed": s, "seeds": None,
-                                         "out": seed_folder(args.out, s) if args.out else None}))
-          for s in seeds]
+  tasks = _tasks(args)
+  if len(set(seeds)) != len(seeds) or len(seeds) * len(tasks) < 2:
+    raise RunError(f"--seeds needs at least two different seeds (or --tasks two tasks); got {args.seeds!r}")
+  return [plan_run(argparse.Namespace(**{**vars(args), "task": task, "tasks": None, "seed": s, "seeds": None,
+                                         "out": _run_folder(args, task, s)}))
+          for task in tasks for s in seeds]
+
+
+def _tasks(args) -> list[str]:
+  """The tasks of a program: --tasks T,T,... (different ones, not with --task) or --task."""
+  if args.tasks is None:
+    return [args.task]
+  tasks = [x.strip() for x in args.tasks.split(",")]
+  if args.task or not all(tasks) or len(set(tasks)) != len(tasks):
+    raise RunError(f"--tasks takes different task names separated by commas, instead of --task; got {args.tasks!r}")
+  return tasks
+
+
+def _run_folder(args, task: str, seed: int) -> str | None:
+  """A run's folder in a program: OUT/s<seed>, with --tasks OUT/<task>/s<seed>; None without --out."""
+  if not args.out:
+    return None
+  return seed_folder(args.out, seed, task if args.tasks else None)
 
 
 def _train_group(plans: list[RunPlan], args) -> int:
@@ -170,7 +193,7 @@ def _train_group(plans: list[RunPlan], args) -> int:
           db.finish(q.run_id, "crashed", {}, None, _detail("crashed", stop, q))
     statuses = [ended[i] for i in range(len(plans))]
   for q, final in zip(plans, finals):
-    print(f"s{q.seed}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
+    print(f"{q.task + ' ' if args.tasks else ''}s{q.seed}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
   if "interrupted" in statuses:
     print("interrupted: checkpoints and policies saved; continue each run alone with:\n"
           + "\n".join(f"  python -m train.run --resume {q.out_dir}" for q in plans), file=sys.stderr, flush=True)
@@ -273,6 +296,8 @@ def main(argv: list[str] | None = None) -> int:
     jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
   try:
     try:
+      if args.tasks is not None and args.seeds is None:
+        raise RunError("--tasks needs --seeds (e.g. --seeds 0)")
       plans = group_plans(args) if args.seeds is not None else [plan_run(args)]
     except (RunError, ConfigError) as e:
       print(f"error: {e}", file=sys.stderr)

@@ -116,19 +116,41 @@ def normalizer_update(cfg: RewardConfig, s: PenaltyNormalizer, done: jax.Array,
   return PenaltyNormalizer(k.astype(jnp.float32), total, count)
 
 
+@struct.dataclass
+class Safety:
+  """A reward kind's safety term as data (runs of several reward kinds in one program): which raw
+  figure it penalizes (config.REWARD_SIGNALS) and its scale."""
+  cog: jax.Array  # () bool: the COG deviation
+  pitch: jax.Array  # () bool: the pitch rate (neither: no safety term)
+  scale: jax.Array  # () float32: reward.cog_scale (1/m) or reward.angular_scale (s/rad); 0 where none
+
+
+def safety_of(reward: RewardConfig) -> Safety:
+  """reward's safety term (Monitor.safety_sample and safety_scale of its kind) as data."""
+  signal = REWARD_SIGNALS[reward.kind]
+  return Safety(jnp.bool_(signal == "cog_deviation"), jnp.bool_(signal == "pitch_rate"),
+                jnp.float32(Monitor(reward, None).safety_scale()))
+
+
 @dataclasses.dataclass(frozen=True)
 class Monitor:
-  """Reward and termination settings of one task."""
+  """Reward and termination settings of one task; safety: its safety term as data (a program's
+  runs of several reward kinds, mjx_tracks.envs.task_data), else the reward kind's."""
 
   reward: RewardConfig
   episode: EpisodeConfig
+  safety: Safety | None = None
 
   def safety_sample(self, cog_dev: jax.Array, pitch_rate: jax.Array) -> jax.Array:
     """The raw safety figure the task's reward kind penalizes (config.REWARD_SIGNALS)."""
+    if self.safety is not None:
+      return jnp.where(self.safety.cog, cog_dev, jnp.where(self.safety.pitch, pitch_rate, 0.0))
     signal = REWARD_SIGNALS[self.reward.kind]
     return jnp.zeros_like(cog_dev) if signal is None else {"cog_deviation": cog_dev, "pitch_rate": pitch_rate}[signal]
 
-  def safety_scale(self) -> float:
+  def safety_scale(self) -> float | jax.Array:
+    if self.safety is not None:
+      return self.safety.scale
     return {"cog": self.reward.cog_scale, "angular": self.reward.angular_scale}.get(self.reward.kind, 0.0)
 
   def safety_rate(self, window: jax.Array, signal_sum: jax.Array, steps: jax.Array) -> jax.Array:

@@ -8,6 +8,9 @@ sampler at difficulty eps; `reset_at(key, eps, penalty_k)` is what the curriculu
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 from brax.envs.base import Env, State
@@ -97,10 +100,19 @@ class TrackedRobotEnv(Env):
     self.randomized = cfg.randomization.enabled or every_path  # the state carries a RobustState
     self.acting = frozenset(g for g in rnd.GROUPS if every_path or cfg.randomization.acts(g))  # costly paths compiled
     self.monitor = Monitor(cfg.reward, cfg.episode)
+    self.task_draw = None  # scenes' draw where it replaces the task's (a view: for_task)
     c = cfg.scene.curriculum
     self.curriculum = Curriculum(window=c.window, rule=c.rule)
     self.part_sizes = part_sizes(o.parts, self.robot, self.beams.n_vertical, self.beams.n_horizontal,
                                  self.scan.size)
+
+  def for_task(self, data) -> "TrackedRobotEnv":
+    """This environment as one run of a program of several tasks sees it (data: its
+    mjx_tracks.envs.task_data.TaskData): scenes from data.draw, the safety term of data.safety;
+    a new object, this one unchanged."""
+    view = copy.copy(self)
+    view.task_draw, view.monitor = data.draw, dataclasses.replace(self.monitor, safety=data.safety)
+    return view
 
   # --- Brax Env interface -------------------------------------------------------------------
   @property
@@ -163,6 +175,7 @@ class TrackedRobotEnv(Env):
     episode's perturbation is drawn too (or given). draw: the scene's sampler and ranges as data
     (where the kind takes them: SceneKind.drawn), instead of the task's."""
     k_scene, k_obs, k_next = jax.random.split(rng, 3)
+    draw = self.task_draw if draw is None else draw
     scene = self.scene.sample(k_scene, eps) if draw is None else self.scene.sample(k_scene, eps, draw)
     robust = None
     if self.randomized:  # its own stream: the paper's tasks draw as before

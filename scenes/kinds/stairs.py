@@ -20,7 +20,7 @@ class Stairs(SceneKind):
   signals = ("pitch_rate", "cog_deviation", "on_stairs")
   parameters = "scene.tread, scene.riser, scene.steps ranges; scene.direction up | down"
   stair_script = True
-  drawn = ("sampler", "tread", "riser", "steps")  # every evaluation scene of a stair task: one program
+  drawn = ("sampler", "tread", "riser", "steps", "direction")  # every evaluation scene of a stair task: one program
 
   def has_hardest(self, s) -> bool:
     return True
@@ -31,9 +31,10 @@ class Stairs(SceneKind):
                       s.random_spawn, s.random_goal)
 
   def draw(self, s, program):
+    import jax.numpy as jnp  # noqa: PLC0415
     from scenes.samplers import as_draw  # noqa: PLC0415
     from scenes.staircase import stair_ranges  # noqa: PLC0415
-    return as_draw(stair_ranges(s.tread, s.riser, s.steps), s.sampler)
+    return as_draw(stair_ranges(s.tread, s.riser, s.steps), s.sampler).replace(ascent=jnp.bool_(s.direction == "up"))
 
   def program_section(self, task, sections):
     """The task's section, its ranges widened to hold every section's (its box pool: the most steps)."""

@@ -3,6 +3,7 @@ and the state's shardings, the compiled update, the evaluator."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import hashlib
@@ -48,7 +49,7 @@ def build(plan, mesh=None) -> Training:
   use_gspmd_partitioner()
   mesh = make_mesh() if mesh is None else mesh
   core = TrackedRobotEnv(plan.cfg)
-  env = ShardedStep(batched_env(core, axis_name=BATCH), mesh)
+  env = training_env(core, mesh)
   spec = network_spec(plan, core)
   note = None
   if plan.algo == "ppo":
@@ -59,6 +60,19 @@ def build(plan, mesh=None) -> Training:
     learner = SAC(env, spec.build(), plan.preset, plan.num_envs)
   abstract = jax.eval_shape(learner.init, jax.random.PRNGKey(0))
   return Training(plan, mesh, core, learner, spec, abstract, state_shardings(abstract, mesh), note)
+
+
+def training_env(core: TrackedRobotEnv, mesh):
+  """The batched environment a learner trains on: each device steps its own robots."""
+  return ShardedStep(batched_env(core, axis_name=BATCH), mesh)
+
+
+def learner_on(t: Training, data):
+  """t's learner on the view of its environment that run data (mjx_tracks.envs.task_data.TaskData)
+  sees, in a program of several tasks (a copy: t's learner unchanged)."""
+  other = copy.copy(t.learner)
+  other.env = training_env(t.core.for_task(data), t.mesh)
+  return other
 
 
 def init_state(t: Training, seed: int):
@@ -100,7 +114,12 @@ def has_evaluations(t: Training) -> bool:
 
 def eval_env(t: Training):
   """The batched environment Brax's evaluator plays: uniform scenes over the task's ranges."""
-  return batched_env(TrackedRobotEnv(scene_config(t.plan.cfg, "uniform")))
+  return batched_env(TrackedRobotEnv(eval_config(t.plan.cfg)))
+
+
+def eval_config(cfg):
+  """The task config of Brax's evaluator's episodes (train.evaluation's uniform scene)."""
+  return scene_config(cfg, "uniform")
 
 
 def brax_evaluator(t: Training, seed: int):

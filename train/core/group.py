@@ -18,7 +18,8 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 
-from train.core.build import Training, build, has_evaluations
+from mjx_tracks.envs.task_data import TaskData, packed_keys, packing_conflict, stacked, task_data
+from train.core.build import Training, build, has_evaluations, learner_on
 from train.core.group_evaluator import GroupEvaluator, evaluations_shared
 from train.core.group_loop import GroupLoop, Member
 from train.core.plan import RunError, RunPlan
@@ -45,11 +46,18 @@ class Prefixed:
 
 
 def build_group(plans: list[RunPlan]) -> Training:
-  """The one build the runs share (the first plan's; the others differ in seed and folder only)."""
+  """The one build the runs share (the first plan's; the others differ in seed and folder, and
+  in task and early stop where their configs differ only in what the program takes as data:
+  mjx_tracks.envs.task_data)."""
   base = plans[0]
   for p in plans[1:]:
-    if dataclasses.replace(p, seed=base.seed, out_dir=base.out_dir, run_id=base.run_id) != base:
-      raise RunError("--seeds: the runs of one program may differ in their seed only")
+    conflict = packing_conflict(base.cfg, p.cfg)
+    if conflict is not None:
+      raise RunError(f"--tasks: {base.task} and {p.task} differ in {conflict}; the runs of one program may "
+                     f"differ in {', '.join(packed_keys(base.cfg))} only")
+    if dataclasses.replace(p, seed=base.seed, out_dir=base.out_dir, run_id=base.run_id, task=base.task,
+                           cfg=base.cfg, early_stop=base.early_stop, overrides=base.overrides) != base:
+      raise RunError("--seeds: the runs of one program may differ in their seed and task only")
   t = build(base)
   if t.mesh.devices.size != 1:
     raise RunError(f"--seeds trains on one device; this process sees {t.mesh.devices.size} "
@@ -83,24 +91,50 @@ def check_memory(t: Training, n: int, free: int | None) -> None:
                    f"{free / 1e9:.1f} GB free on {jax.devices()[0].platform}; fewer seeds{hint}")
 
 
-def compile_group(t: Training, n: int, stream=None):
-  """The vmapped update of n runs, compiled ahead of time with the states donated."""
+def group_tasks(t: Training, plans: list[RunPlan]) -> TaskData | None:
+  """Each run's task as data, stacked (mjx_tracks.envs.task_data); None where every run has t's."""
+  if all(p.cfg == t.plan.cfg for p in plans):
+    return None
+  return stacked([task_data(p.cfg, t.plan.cfg) for p in plans])
+
+
+def init_group(t: Training, plans: list[RunPlan], tasks: TaskData | None):
+  """Each run's fresh learner state (its seed's, its task's scenes), stacked."""
+  keys = jnp.stack([jax.random.PRNGKey(p.seed) for p in plans])
+  if tasks is None:
+    return jax.jit(jax.vmap(t.learner.init))(keys)
+  return jax.jit(jax.vmap(lambda k, d: learner_on(t, d).init(k)))(keys, tasks)
+
+
+def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = None):
+  """update(states) of n runs (tasks: their tasks as data, group_tasks), vmapped and compiled ahead
+  of time with the states donated."""
   stream = stream or sys.stdout  # as it is now (a test's capture), not as it was at import
   print(f"compiling the training step of {n} runs in one program ...", file=stream, flush=True)
   t0 = time.time()
   shaped = jax.tree_util.tree_map(lambda a: jax.ShapeDtypeStruct((n,) + a.shape, a.dtype), t.abstract)
-  compiled = jax.jit(jax.vmap(t.learner.update), donate_argnums=0).lower(shaped).compile()
+  if tasks is None:
+    compiled = jax.jit(jax.vmap(t.learner.update), donate_argnums=0).lower(shaped).compile()
+  else:
+    update = jax.jit(jax.vmap(lambda s, d: learner_on(t, d).update(s)), donate_argnums=0).lower(shaped, tasks).compile()
+    compiled = lambda states: update(states, tasks)  # noqa: E731
   print(f"compiled in {time.time() - t0:,.0f} s", file=stream, flush=True)
   return compiled
 
 
+def run_tag(plan: RunPlan, several_tasks: bool) -> str:
+  """How a program's output names one of its runs: s<seed>, or <task> s<seed> in a program of several tasks."""
+  return f"{plan.task} s{plan.seed}" if several_tasks else f"s{plan.seed}"
+
+
 def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions,
-            on_end: Callable[[dict], None]) -> tuple[Member, Reporter]:
+            on_end: Callable[[dict], None], tag: str) -> tuple[Member, Reporter]:
   """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of this run;
-  on_end(summary): told as soon as the run has ended, checkpointed and exported."""
+  on_end(summary): told as soon as the run has ended, checkpointed and exported; tag: its name in
+  the program's output (run_tag)."""
   ti = dataclasses.replace(t, plan=plan)
   checkpointer = checkpointer_of(ti, db, options)
-  reporter = Reporter(plan.total_steps, 0, db, plan.run_id, f"{plan.out_dir}/tb", stream=Prefixed(f"s{plan.seed} "))
+  reporter = Reporter(plan.total_steps, 0, db, plan.run_id, f"{plan.out_dir}/tb", stream=Prefixed(tag + " "))
 
   def finish(result) -> dict[str, Any]:  # the run's checkpoint, policy and summary, as soon as it ends
     try:
@@ -120,7 +154,7 @@ def prepare_group(plans: list[RunPlan]) -> Training:
   return t
 
 
-def group_evaluations(t: Training, plans: list[RunPlan]) -> tuple[GroupEvaluator | None, list]:
+def group_evaluations(t: Training, plans: list[RunPlan], tasks: TaskData | None = None) -> tuple[GroupEvaluator | None, list]:
   """(the shared evaluation or None, each run's evaluate(state) or None): every run's Brax evaluation
   in one unroll where their episodes share no statistic (evaluations_shared), else each run's own
   evaluator in turn."""
@@ -128,7 +162,7 @@ def group_evaluations(t: Training, plans: list[RunPlan]) -> tuple[GroupEvaluator
     return None, [None] * len(plans)
   if not evaluations_shared(t.plan.cfg):
     return None, [evaluator_of(t, p.seed) for p in plans]
-  shared = GroupEvaluator(t, [p.seed for p in plans])
+  shared = GroupEvaluator(t, [p.seed for p in plans], None if tasks is None else [p.cfg for p in plans])
   return shared, [shared.member(i) for i in range(len(plans))]
 
 
@@ -138,12 +172,14 @@ def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOpt
   stop request; each run is checkpointed and exported as it ends, then on_end(its index, its
   summary) records it (a run that ended stays ended if the program fails later); returns each
   run's summary (as train.core.session.train)."""
-  states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(p.seed) for p in plans]))
-  update = compile_group(t, len(plans))
-  evaluate, evaluations = group_evaluations(t, plans)
-  probe = GroupProbe(t) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
+  tasks = group_tasks(t, plans)
+  states = init_group(t, plans, tasks)
+  update = compile_group(t, len(plans), tasks=tasks)
+  evaluate, evaluations = group_evaluations(t, plans, tasks)
+  configs = None if tasks is None else [p.cfg for p in plans]
+  probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
   parts = [_member(t, p, db, (evaluations[i], probe and probe.member(i)), options,
-                   lambda summary, i=i: on_end(i, summary)) for i, p in enumerate(plans)]
+                   lambda summary, i=i: on_end(i, summary), run_tag(p, tasks is not None)) for i, p in enumerate(plans)]
   shared = [s for s in (evaluate, probe) if s is not None]
 
   def after_update(states, step: int) -> None:

@@ -19,7 +19,10 @@ import numpy as np
 from brax.envs.wrappers.training import EvalWrapper
 from brax.training import acting
 
-from train.core.build import Training, eval_env, eval_key
+from mjx_tracks.envs.task_data import stacked, task_data
+from mjx_tracks.envs.task_env import TrackedRobotEnv
+from mjx_tracks.envs.wrappers import batched_env
+from train.core.build import Training, eval_config, eval_env, eval_key
 from train.core.group_loop import AllRuns
 from train.core.mesh import to_host
 
@@ -63,23 +66,42 @@ def episode_metrics(eval_metrics, runs: int) -> list[dict[str, float]]:
   return out
 
 
+def _unroll(t: Training, runs: int, episodes: int, length: int, make, configs: list | None):
+  """unroll(params, unroll_keys) -> the episodes' eval metrics, block i run i's (see GroupEvaluator)."""
+  def play(env, params, unroll_keys, n: int):
+    resets = jax.vmap(lambda k: jax.random.split(k, episodes))(unroll_keys)  # each run's own, as Brax's
+    first = env.reset(resets.reshape((n * episodes,) + resets.shape[2:]))
+    # the policy is deterministic: the acting key (run 0's) is not read
+    final, _ = acting.generate_unroll(env, first, group_policy(make, params, n), unroll_keys[0], length)
+    return final.info["eval_metrics"]
+
+  if configs is None:
+    env = EvalWrapper(eval_env(t))
+    return lambda params, unroll_keys: play(env, params, unroll_keys, runs)
+  core = TrackedRobotEnv(eval_config(t.plan.cfg))
+  tasks = stacked([task_data(eval_config(c), core.cfg) for c in configs])
+
+  def each(params, unroll_key, task):  # one run's episodes on its own task's scenes
+    one = jax.tree.map(lambda x: x[None], (params, unroll_key))  # a program of one run
+    return play(EvalWrapper(batched_env(core.for_task(task))), *one, 1)
+
+  def unroll(params, unroll_keys):
+    metrics = jax.vmap(each)(params, unroll_keys, tasks)  # (runs, episodes, ...): as one batch's blocks
+    return jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:]), metrics)
+  return unroll
+
+
 class GroupEvaluator(AllRuns):
   """evaluate(states with a leading run axis) -> each run's Brax evaluation metrics, one unroll for
   all; `member(i)`: run i's evaluation (train.core.group_loop.AllRuns)."""
 
-  def __init__(self, t: Training, seeds: list[int]):
+  def __init__(self, t: Training, seeds: list[int], configs: list | None = None):
+    """configs: each run's task config where the runs' tasks differ (mjx_tracks.envs.task_data:
+    each run's episodes then come from its own task's uniform scenes, in an unroll of its own,
+    vmapped over the runs)."""
     runs, episodes, length = len(seeds), t.plan.preset.num_eval_envs, t.plan.cfg.episode.max_steps
-    env = EvalWrapper(eval_env(t))
     make = functools.partial(t.learner.make_policy, deterministic=True)
-
-    def unroll(params, unroll_keys):
-      resets = jax.vmap(lambda k: jax.random.split(k, episodes))(unroll_keys)  # each run's own, as Brax's
-      first = env.reset(resets.reshape((runs * episodes,) + resets.shape[2:]))
-      # the policy is deterministic: the acting key (run 0's) is not read
-      final, _ = acting.generate_unroll(env, first, group_policy(make, params, runs), unroll_keys[0], length)
-      return final.info["eval_metrics"]
-
-    self._unroll, self._runs = jax.jit(unroll), runs
+    self._unroll, self._runs = jax.jit(_unroll(t, runs, episodes, length, make, configs)), runs
     self._keys = jnp.stack([eval_key(s) for s in seeds])
     self._steps, self._walltime = runs * episodes * length, 0.0  # the program's env steps per evaluation; s evaluating
     self._params = t.learner.policy_params

@@ -42,8 +42,10 @@ class GroupProbe(AllRuns):
   vmapped over the runs' policies, so probing n runs costs about one run's probe, not n;
   `member(i)` is run i's probe (train.core.group_loop.AllRuns)."""
 
-  def __init__(self, t, trials: int = EVAL_TRIALS):
+  def __init__(self, t, trials: int = EVAL_TRIALS, configs: list | None = None):
+    """configs: each run's task config where the runs' tasks differ (each probed on its own task's
+    probe scene: train.evaluation.group_trial_runner)."""
     params = t.learner.policy_params
     run = group_trial_runner(t.plan.cfg, t.plan.cfg.scene.probe_scene, act_from_params(t.spec), trials,
-                             EVAL_EPS, EVAL_SEED)
+                             EVAL_EPS, EVAL_SEED, configs)
     super().__init__(lambda states: [means(fig) for fig in run(to_host(params(states)))])

@@ -37,9 +37,10 @@ def read_run_record(run_dir: str, required: tuple[str, ...] = REQUIRED) -> dict:
   return meta
 
 
-def seed_folder(out: str, seed: int) -> str:
-  """The folder of seed `seed`'s run among the runs of one program (train.run --seeds S,... --out OUT)."""
-  return os.path.join(out, f"s{seed}")
+def seed_folder(out: str, seed: int, task: str | None = None) -> str:
+  """The folder of seed `seed`'s run among the runs of one program (train.run --seeds S,... --out
+  OUT): OUT/s<seed>; in a program of several tasks (--tasks; task given) OUT/<task>/s<seed>."""
+  return os.path.join(out, f"s{seed}") if task is None else os.path.join(out, task, f"s{seed}")
 
 
 def run_id_in(run_dir: str) -> str | None:

@@ -15,7 +15,7 @@ import sys
 from mjx_tracks.envs.config import ConfigError
 from train.study.cluster import add_cluster_args
 from train.study.executor import STUDY_DB, cell_folder_of
-from train.study.spec import cells, group_tasks, load_study, packs_of, runs_of
+from train.study.spec import cells, group_tasks, load_study, pack_args, packs_of, runs_of
 
 
 def parser() -> argparse.ArgumentParser:
@@ -64,9 +64,9 @@ def main(argv=None) -> int:
   for c in runs:
     print(f"{c.id}: python -m train.run {shlex.join(c.run_args(cell_folder_of(folder, c.id), db))}")
   for pack in packs_of(runs):
-    print(f"{pack[0].id} .. s{pack[-1].seed} start as one program where none has started yet or the study's "
+    print(f"{pack[0].id} .. {pack[-1].id} start as one program where none has started yet or the study's "
           f"stop cut them off with no checkpoint (a retry resumes each run alone): python -m "
-          f"train.run {shlex.join(pack[0].pack_args([c.seed for c in pack]))} --out SCRATCH --db SCRATCH.sqlite")
+          f"train.run {shlex.join(pack_args(pack))} --out SCRATCH --db SCRATCH.sqlite")
   for c in base:
     print(f"{c.id}: python -m train.evaluate {shlex.join([cell_folder_of(folder, c.id), *c.eval_args(spec.eval_trials), '--db', db])}")
   return 0

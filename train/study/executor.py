@@ -19,7 +19,7 @@ from mjx_tracks import atomic
 from train.db import ExperimentDB
 from train.core.plan import DEFAULT_LIBRARY
 from train.core.run_record import read_run_record, run_id_in
-from train.study.spec import Cell, StudySpec, cells, packs_of
+from train.study.spec import Cell, StudySpec, cells, pack_args, pack_folders, packs_of
 from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, run_pack, unpack
 
 STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
@@ -178,15 +178,16 @@ class StudyRunner:
     return future
 
   def _submit_pack(self, cids: list[str]):
-    """Fresh cells that differ only in their seed, trained as one program (train.run --seeds)."""
+    """Fresh cells that differ only in their seed (and task: packs_of), trained as one program
+    (train.run --seeds [--tasks])."""
     cells = [self.cells[cid] for cid in cids]
     for cid in cids:  # a folder here is what a cut-off attempt left (no checkpoint): the pack replaces it
       shutil.rmtree(cell_folder(self.folder, self.cells[cid]), ignore_errors=True)
       self._begin(cid)
       self.state.cells[cid]["attempts"][-1]["pack"] = cids
     key = f"{cids[0]}/attempt-{len(self.state.cells[cids[0]]['attempts'])}+{len(cids) - 1}"
-    future = self.client.submit(run_pack, cells[0].pack_args([c.seed for c in cells]),
-                                [c.seed for c in cells], cells[0].eval_args(self.spec.eval_trials), self.commands,
+    future = self.client.submit(run_pack, pack_args(cells), pack_folders(cells),
+                                cells[0].eval_args(self.spec.eval_trials), self.commands,
                                 key=key, pure=False, resources=self._resources(cells[0]))
     self.owners[key] = cids
     return future
@@ -211,7 +212,8 @@ class StudyRunner:
       return {cid: failed for cid in cids}
     if "cells" not in res:
       return {cids[0]: res}
-    return {cid: res["cells"][self.cells[cid].seed] for cid in cids}
+    members = pack_folders([self.cells[cid] for cid in cids])  # each cell's folder in the pack's output
+    return {cid: res["cells"][m] for cid, m in zip(cids, members)}
 
   def _settle(self, cid: str, res: dict, stopped: bool = False) -> bool:
     """Records an attempt's outcome (res: _results'; stopped: by the study's own stop, not counted

@@ -14,12 +14,13 @@ from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, M
 from train.core.early_stop import NO_EARLY_STOP, parse_early_stop
 from train.evaluation import EVAL_TRIALS, robustness_scenes, scene_config
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
+from train.core.run_record import seed_folder
 from train.core.presets import SB3, get_preset, with_hyperparams
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES),
                   "robustness": False}
 GROUP_DEFAULTS = {"preset": "gpu", "library": DEFAULT_LIBRARY, "early_stop": "", "set": [], "hp": [], "backend": "gpu", "budgets": "runs", "tasks": [],
-                  "pack_seeds": False}
+                  "pack_seeds": False, "pack_tasks": False}
 BACKENDS = ("gpu", "cpu")
 BUDGETS = ("runs", "milestones")  # a run per step budget | one run of the largest, its policy exported at the others
 
@@ -39,6 +40,7 @@ class GroupSpec:
   budgets: str  # BUDGETS: runs | milestones
   tasks: tuple[str, ...]  # the study's tasks this group trains; empty: all of them
   pack_seeds: bool  # a run's seeds start as one program (train.run --seeds), one worker slot for all
+  pack_tasks: bool  # with pack_seeds: the packs of its tasks too, where one program takes their differences as data
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,6 +73,7 @@ class Cell:
   library: str = DEFAULT_LIBRARY  # train.run --library
   robustness: bool = False  # its evaluation adds the robustness suite
   pack_seeds: bool = False  # its first attempt trains beside the other seeds of its pack in one program
+  pack_tasks: bool = False  # ... and beside its group's other tasks where their configs allow (train.run --tasks)
 
   @property
   def id(self) -> str:
@@ -101,11 +104,20 @@ class Cell:
       args += ["--milestones", ",".join(map(str, self.milestones))]
     return args + ["--early-stop", self.early_stop or NO_EARLY_STOP]  # the group's, not the preset's
 
-  def pack_args(self, seeds: list[int]) -> list[str]:
-    """`python -m train.run` arguments of this cell's pack: its own, with --seeds S,S,... for --seed."""
+  def pack_args(self, seeds: list[int], tasks: list[str] | None = None) -> list[str]:
+    """`python -m train.run` arguments of this cell's pack: its own, with --seeds S,S,... for --seed
+    (and --tasks T,T,... for --task where the pack spans several tasks)."""
     args = self.train_args()
     i = args.index("--seed")
-    return [*args[:i], "--seeds", ",".join(map(str, seeds)), *args[i + 2:]]
+    args = [*args[:i], "--seeds", ",".join(map(str, seeds)), *args[i + 2:]]
+    if tasks is not None and len(tasks) > 1:
+      i = args.index("--task")
+      args = [*args[:i], "--tasks", ",".join(tasks), *args[i + 2:]]
+    return args
+
+  def config(self):
+    """The run's task config with the group's overrides (the preset's aside)."""
+    return load_config(self.task, self.overrides)
 
   @property
   def pack_key(self) -> "Cell":
@@ -141,6 +153,7 @@ def _group(raw, i: int) -> GroupSpec:
   require(g.budgets in BUDGETS, f"{key}.budgets", lambda: f"one of {BUDGETS}, got {show(g.budgets)}")
   require(not g.pack_seeds or g.library == DEFAULT_LIBRARY, f"{key}.pack_seeds",
           f"packs seeds into one program of this project's trainer; {g.library} trains one run per process")
+  require(not g.pack_tasks or g.pack_seeds, f"{key}.pack_tasks", "joins packs of seeds: set pack_seeds: true too")
   require(g.budgets == "runs" or not g.early_stop, f"{key}.budgets",
           "milestones stand for smaller budgets of one run; an early stop would cut them short")
   return g
@@ -234,20 +247,50 @@ BASELINE_GROUP = "baseline-"  # + the baseline's name: the group of its cells
 
 
 def packs_of(fresh: list[Cell]) -> list[list[Cell]]:
-  """The packs of seeds among cells with nothing trained yet: those of a pack_seeds group that differ
-  only in their seed (two or more), in order."""
+  """The packs among cells with nothing trained yet (two or more cells each, in order): those of a
+  pack_seeds group that differ only in their seed; of a pack_tasks group, those packs joined across
+  the group's tasks where they have the same seeds and one program takes their configs' differences
+  as data (mjx_tracks.envs.task_data; train.run --tasks), task after task."""
   packs: dict[Cell, list[Cell]] = {}
   for c in fresh:
     if c.pack_seeds and not c.is_baseline:
       packs.setdefault(c.pack_key, []).append(c)
-  return [p for p in packs.values() if len(p) > 1]
+  joined: list[list[Cell]] = []
+  for p in packs.values():
+    home = next((q for q in joined if p[0].pack_tasks and _joins(q, p)), None)
+    if home is None:
+      joined.append(list(p))
+    else:
+      home.extend(p)
+  return [p for p in joined if len(p) > 1]
+
+
+def _joins(pack: list[Cell], seeds: list[Cell]) -> bool:
+  """Whether a pack of one task's seeds may join a pack (its first task's) in one program."""
+  from mjx_tracks.envs.task_data import packing_conflict  # noqa: PLC0415  (JAX: only where packs are formed)
+  a, b = pack[0], seeds[0]
+  return (dataclasses.replace(a.pack_key, task="") == dataclasses.replace(b.pack_key, task="")
+          and [c.seed for c in pack if c.task == a.task] == [c.seed for c in seeds]
+          and packing_conflict(a.config(), b.config()) is None)
+
+
+def pack_args(pack: list[Cell]) -> list[str]:
+  """`python -m train.run` arguments of a pack (packs_of), less its folder and database."""
+  tasks = list(dict.fromkeys(c.task for c in pack))
+  return pack[0].pack_args(list(dict.fromkeys(c.seed for c in pack)), tasks)
+
+
+def pack_folders(pack: list[Cell]) -> list[str]:
+  """Each cell's run folder in its pack's output folder (train.core.run_record.seed_folder)."""
+  several = len({c.task for c in pack}) > 1
+  return [seed_folder("", c.seed, c.task if several else None) for c in pack]
 
 
 def cells(spec: StudySpec) -> list[Cell]:
   """The study's runs: group x task x budget x seed, in that order; then one evaluation of each
   baseline on each task it can drive (its trials vary by themselves; seed: the study's first)."""
   trained = [Cell(g.name, task, steps, seed, g.algo, g.preset, g.early_stop, g.set, g.backend, milestones, g.hp,
-                  g.library, spec.robustness, g.pack_seeds)
+                  g.library, spec.robustness, g.pack_seeds, g.pack_tasks)
              for g in spec.groups for task in group_tasks(spec, g) for steps, milestones in runs_of(g)
              for seed in spec.seeds]
   return trained + [Cell(BASELINE_GROUP + name, task, 0, spec.seeds[0], BASELINE_ALGO, name, "", (), "gpu",

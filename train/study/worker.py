@@ -15,7 +15,7 @@ import tarfile
 import tempfile
 
 from mjx_tracks import atomic
-from train.core.run_record import run_id_in, seed_folder
+from train.core.run_record import run_id_in
 from train.db import FINISHED, ExperimentDB
 
 # what a worker runs, after its own Python (sys.executable there: workers may be other machines)
@@ -99,27 +99,29 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
     shutil.rmtree(scratch, ignore_errors=True)
 
 
-def run_pack(pack_args: list[str], seeds: list[int], eval_args: list[str],
+def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
              commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
-  """First attempts of cells that differ only in their seed, as one program (`train.run --seeds`);
-  then the evaluation of each run that ended (its total steps or its early stop; also where the
-  program failed later, e.g. by another run), side by side. {"cells": {seed: run_cell's result}}:
-  each run's folder comes back with its own records (run.sqlite) and the pack's training output."""
+  """First attempts of cells that differ only in their seed (and task: train.study.spec.packs_of),
+  as one program (`train.run --seeds [--tasks]`); members: each run's folder in the program's output
+  (train.study.spec.pack_folders); then the evaluation of each run that ended (its total steps or
+  its early stop; also where the program failed later, e.g. by another run), side by side.
+  {"cells": {member: run_cell's result}}: each run's folder comes back with its own records
+  (run.sqlite) and the pack's training output."""
   scratch = tempfile.mkdtemp(prefix="study-pack-")
   out, shared_db, log = (os.path.join(scratch, name) for name in ("pack", "pack.sqlite", "train.log"))
   try:
     rc = _call([sys.executable, *commands[0], *pack_args, "--out", out, "--db", shared_db], log, None, "train")
-    folders = {s: seed_folder(out, s) for s in seeds}
-    ended = [s for s in seeds if _ended(folders[s], shared_db)]
-    for s in seeds:  # each run's rows in a database of its own, as a single run's
-      if os.path.isdir(folders[s]) and os.path.exists(shared_db):
-        ExperimentDB(os.path.join(folders[s], RUN_DB)).import_runs(shared_db, only=[run_id_in(folders[s])])
-    evaluated = _evaluate_side_by_side({s: folders[s] for s in ended}, eval_args, commands[1], scratch) \
-        if eval_args else {s: ("train", 0, "") for s in ended}
+    folders = {m: os.path.join(out, m) for m in members}
+    ended = [m for m in members if _ended(folders[m], shared_db)]
+    for m in members:  # each run's rows in a database of its own, as a single run's
+      if os.path.isdir(folders[m]) and os.path.exists(shared_db):
+        ExperimentDB(os.path.join(folders[m], RUN_DB)).import_runs(shared_db, only=[run_id_in(folders[m])])
+    evaluated = _evaluate_side_by_side({m: folders[m] for m in ended}, eval_args, commands[1], scratch) \
+        if eval_args else {m: ("train", 0, "") for m in ended}
     trained, results = open(log).read() if os.path.exists(log) else "", {}
-    for s in seeds:  # a run that did not end failed with the program (its checkpoints, if any, come back)
-      phase, code, output = evaluated.get(s, ("train", rc or 1, ""))
-      results[s] = _outcome(folders[s], code, phase, trained + output)
+    for m in members:  # a run that did not end failed with the program (its checkpoints, if any, come back)
+      phase, code, output = evaluated.get(m, ("train", rc or 1, ""))
+      results[m] = _outcome(folders[m], code, phase, trained + output)
     return {"cells": results}
   finally:
     shutil.rmtree(scratch, ignore_errors=True)
@@ -136,15 +138,15 @@ def _ended(folder: str, db: str) -> bool:
     return False
 
 
-def _evaluate_side_by_side(folders: dict[int, str], eval_args: list[str], command: tuple[str, ...],
-                           scratch: str) -> dict[int, tuple[str, int, str]]:
+def _evaluate_side_by_side(folders: dict[str, str], eval_args: list[str], command: tuple[str, ...],
+                           scratch: str) -> dict[str, tuple[str, int, str]]:
   """Evaluates the run folders at once (one process each; on a GPU none preallocates memory);
-  {seed: ("evaluate", exit code, output)}. Any started process is waited for, whatever happens."""
+  {member: ("evaluate", exit code, output)}. Any started process is waited for, whatever happens."""
   env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}
   procs, done = {}, {}
   try:
     for s, folder in folders.items():
-      with open(os.path.join(scratch, f"evaluate-s{s}.log"), "w") as log:
+      with open(os.path.join(scratch, f"evaluate-{s.replace(os.sep, '-')}.log"), "w") as log:
         argv = _evaluate_argv(command, folder, eval_args, os.path.join(folder, RUN_DB))
         procs[s] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
   finally:

@@ -1,0 +1,118 @@
+"""Runs of several tasks in one program (`train.run --tasks A,B --seeds ...`; mjx_tracks.envs.task_data):
+each run's view of the program's environment starts, steps and rewards as its own task's
+environment does; each run starts from the state it would start from alone; the program's probe
+and Brax evaluation of each run are those of its own task; configs that differ beyond the data a
+program takes are refused in one line before anything is written."""
+
+import dataclasses
+import os
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from helpers import TINY, TINY_SETTINGS
+from mjx_tracks.envs.config import load_config
+from mjx_tracks.envs.task_data import packing_conflict, task_data
+from mjx_tracks.envs.task_env import TrackedRobotEnv
+from train import run
+from train.core.build import brax_evaluator, build
+from train.core.group import build_group, group_tasks, init_group
+from train.core.group_evaluator import GroupEvaluator
+from train.core.group_loop import run_slice
+from train.core.mesh import to_host
+from train.core.plan import plan_run
+from train.core.policy import act_from_params
+from train.evaluation import group_trial_runner
+
+ASC, DES = "asc-inc-cog", "des-uni-ang"  # direction, sampler and reward kind all differ
+SAC_TINY = ["--algo", "sac", "--preset", "cpu", *TINY]
+
+
+def _plan(task: str, seed: int, out):
+  return plan_run(run.parser().parse_args(["--task", task, "--seed", str(seed), *SAC_TINY, "--out", str(out)]))
+
+
+@pytest.fixture(scope="module")
+def program(tmp_path_factory):
+  """(t, plans, states): asc-inc-cog seed 0 and des-uni-ang seed 1 in one program, fresh states."""
+  out = tmp_path_factory.mktemp("pack")
+  plans = [_plan(ASC, 0, out / "a"), _plan(DES, 1, out / "d")]
+  t = build_group(plans)
+  return t, plans, init_group(t, plans, group_tasks(t, plans))
+
+
+def test_a_runs_view_starts_steps_and_is_rewarded_as_its_own_tasks_environment():
+  """The descent task's view of the ascent task's environment against the descent task's own: the
+  same first state bit for bit (spawn on the landing, scene), then the same rewards and pitch-rate
+  sums step by step (the ascent's own reward would sum the COG deviation, 0 off the stairs)."""
+  asc, des = (load_config(task, TINY_SETTINGS) for task in (ASC, DES))
+  assert packing_conflict(asc, des) is None
+  view, alone = TrackedRobotEnv(asc).for_task(task_data(des, asc)), TrackedRobotEnv(des)
+
+  def play(env):
+    def episode(key):
+      first = env.reset_at(key, jnp.float32(0.5), jnp.float32(1.0))
+
+      def body(s, _):
+        s = env.step(s, jnp.full(env.action_size, 0.8))
+        return s, (s.reward, s.pipeline_state.signal_sum, s.pipeline_state.data.qpos)
+      return first.pipeline_state, jax.lax.scan(body, first, None, length=4)[1]
+    return jax.jit(episode)(jax.random.PRNGKey(3))
+
+  (start, steps), (start_alone, steps_alone) = play(view), play(alone)
+  assert all(np.array_equal(a, b) for a, b in zip(jax.tree_util.tree_leaves(start), jax.tree_util.tree_leaves(start_alone)))
+  assert float(start.data.qpos[2]) > 0.2  # on the landing: a descent's spawn
+  for got, want in zip(steps, steps_alone):
+    np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-5, atol=1e-6)
+  assert float(steps[1][-1]) > 0.01  # the pitch rate, summed: not the ascent's COG deviation
+
+
+def test_each_run_of_a_program_of_several_tasks_starts_as_it_would_alone(program):
+  t, plans, states = program
+  for i, p in enumerate(plans):
+    alone = jax.jit(build(p).learner.init)(jax.random.PRNGKey(p.seed))
+    mine = run_slice(states, i)
+    assert all(np.array_equal(np.asarray(a), np.asarray(b))
+               for a, b in zip(jax.tree_util.tree_leaves(mine), jax.tree_util.tree_leaves(alone))), p.task
+
+
+def test_the_program_probes_each_run_on_its_own_tasks_probe_scene(program):
+  """The probe of both runs in one rollout: run 1's trials are those of the descent task's own
+  probe runner (its hardest staircase downwards), not the ascent's."""
+  t, plans, states = program
+  params = to_host(t.learner.policy_params(states))
+  act = act_from_params(t.spec)
+  both = group_trial_runner(plans[0].cfg, "hardest", act, 4, 0.5, 0, configs=[p.cfg for p in plans])(params)
+  own = group_trial_runner(plans[1].cfg, "hardest", act, 4, 0.5, 0)(params)[1]
+  wrong = group_trial_runner(plans[0].cfg, "hardest", act, 4, 0.5, 0)(params)[1]
+  for name in ("final_x", "final_z", "pitch_rate", "progress"):
+    np.testing.assert_allclose(both[1][name], own[name], rtol=1e-4, atol=1e-5, err_msg=name)
+  assert not np.allclose(both[1]["final_z"], wrong["final_z"], atol=1e-2)
+
+
+def test_the_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_its_own_task_gives(program):
+  t, plans, states = program
+  t = dataclasses.replace(t, plan=dataclasses.replace(t.plan, preset=dataclasses.replace(t.plan.preset, num_eval_envs=4)))
+  group = GroupEvaluator(t, [p.seed for p in plans], [p.cfg for p in plans])
+  got = group.evaluate(states)
+  for i, p in enumerate(plans):
+    own = build(dataclasses.replace(p, preset=t.plan.preset))
+    want = brax_evaluator(own, p.seed).run_evaluation(to_host(own.learner.policy_params(run_slice(states, i))),
+                                                       training_metrics={})
+    figures = [k for k in want if k.startswith("eval/episode_")]
+    assert len(figures) > 10
+    for k in figures:
+      assert got[i][k] == pytest.approx(want[k], rel=2e-3, abs=1e-6), (p.task, k)
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--tasks", f"{ASC},asc-hard", "--seeds", "0"], "differ in scene.riser"),  # another box pool
+    (["--tasks", f"{ASC},{ASC}", "--seeds", "0"], "--tasks takes different task names"),
+    (["--tasks", f"{ASC},{DES}"], "--tasks needs --seeds"),
+    (["--tasks", f"{ASC},{DES}", "--task", ASC, "--seeds", "0"], "instead of --task")])
+def test_tasks_one_program_cannot_hold_are_refused_in_one_line_before_anything_is_written(argv, words, tmp_path, capsys):
+  assert run.main([*argv, *SAC_TINY, "--steps", "64", "--out", str(tmp_path / "g")]) == 2
+  err = capsys.readouterr().err
+  assert words in err and len(err.strip().splitlines()) == 1 and not os.path.exists(tmp_path / "g")
