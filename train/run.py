@@ -8,6 +8,7 @@
     python -m train.run --task des-inc-ang --hp discounting=0.995  # a preset's hyper-parameter
     python -m train.run --task asc-inc-cog --library brax       # Brax's own ppo.train (no checkpoints)
     python -m train.run --task nav --seeds 0,1,2,3,4 --out runs/nav  # 5 runs in one program: runs/nav/s0 ...
+    python -m train.run --tasks asc-inc-cog,des-inc-ang --seeds 0,1 --out runs/p  # 4 runs: runs/p/asc-inc-cog/s0 ...
 
 Writes into the run directory: run.json, checkpoints/ (orbax, the whole training state, every
 --checkpoint-every seconds and at the end), policy/ (the exported policy), tb/ (TensorBoard);
