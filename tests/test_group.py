@@ -127,6 +127,25 @@ def test_the_group_bench_times_single_runs_and_one_program_of_all(tmp_path, monk
     assert parsed.early_stop == "none" and parsed.steps == 300
 
 
+def test_the_group_bench_with_tasks_times_the_runs_spread_over_them_against_the_seeds_program(tmp_path, monkeypatch):
+  """--tasks: the seeds program of the first task, then the same number of runs over the tasks in
+  one program (train.run --tasks), every run its whole budget; tasks_in_seeds from the rows."""
+  from train.bench import group as bench_group
+  monkeypatch.setattr(bench_group, "TRAIN", (os.path.join(os.path.dirname(__file__), "fake_study_run.py"), "train"))
+  out, work = str(tmp_path / "group.json"), tmp_path / "work"
+  work.mkdir()
+  assert bench_main(["group", "--runs", "4", "--singles", "0", "--tasks", "asc-inc-cog,des-inc-ang", "--steps", "200",
+                     "--work", str(work), "--out", out, "--", "--task", "nav", "--algo", "ppo", "--preset", "cpu"]) == 0
+  result = json.load(open(out))
+  assert [r["mode"] for r in result["rows"]] == ["group", "tasks"] and "group_in_singles" not in result
+  assert result["tasks_in_seeds"] == round(result["rows"][1]["process_wall_s"] / result["rows"][0]["process_wall_s"], 2)
+  for name, runs_wanted in (("group", {("asc-inc-cog", s) for s in range(4)}),
+                            ("tasks", {(t, s) for t in ("asc-inc-cog", "des-inc-ang") for s in (0, 1)})):
+    runs = dbmod.ExperimentDB(str(work / f"{name}.sqlite")).runs()
+    assert {(r["task"], r["seed"]) for r in runs} == runs_wanted and all(r["status"] == "done" for r in runs)
+  assert bench_main(["group", "--runs", "3", "--tasks", "asc-inc-cog,des-inc-ang"]) == 2  # 2 tasks do not divide 3
+
+
 def test_the_group_bench_refuses_a_group_of_one_in_one_line(capsys):
   assert bench_main(["group", "--runs", "1"]) == 2
   assert capsys.readouterr().err.startswith("error: --runs >= 2")

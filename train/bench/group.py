@@ -4,7 +4,10 @@ timed from start to exit. Issue 30's target is N = 20 one-robot SAC runs of the 
 the wall time of 2 single runs: `group_in_singles` (the program's wall time over one single run's
 mean) <= 2. Each process compiles from scratch in an empty compilation cache of its own (`--warm`:
 the machine's cache, e.g. for a quick check); every run trains its whole budget (`--early-stop
-none`); extra `train.run` arguments follow `--`."""
+none`); extra `train.run` arguments follow `--`. With `--tasks T,T,...` (runs of several tasks in
+one program: `train.run --tasks`), a third process trains the same number of runs spread over
+those tasks (N / tasks seeds each) after the program of N seeds of the first task:
+`tasks_in_seeds` (its wall time over the seeds program's) is what holding several tasks costs."""
 
 from __future__ import annotations
 
@@ -24,6 +27,9 @@ def add_args(p) -> None:
   p.add_argument("--runs", type=int, default=20, help="runs in the program (seeds 0..N-1; default %(default)s)")
   p.add_argument("--singles", type=int, default=2, help="runs timed one process each (default %(default)s)")
   p.add_argument("--steps", type=int, default=20_000, help="steps of every run (default: the paper's %(default)s)")
+  p.add_argument("--tasks", metavar="T,T,...", help="also time the runs spread over these tasks in one program "
+                                                     "(the first task: the singles' and the seeds program's; its "
+                                                     "--task in ARGS is replaced)")
   p.add_argument("--warm", action="store_true", help="use the machine's compilation cache (default: empty caches)")
   p.add_argument("--work", help="folder for the runs (default: a new temporary one)")
   p.add_argument("train_args", nargs="*", metavar="-- ARGS",
@@ -46,11 +52,27 @@ def train_args(args) -> list[str]:
   return [*(args.train_args or PAPER), "--steps", str(args.steps), "--early-stop", "none"]
 
 
+def _tasks(args) -> list[str]:
+  tasks = args.tasks.split(",") if args.tasks else []
+  if tasks and (len(set(tasks)) != len(tasks) or len(tasks) < 2 or args.runs % len(tasks)):
+    raise BenchInputError(f"--tasks: two or more different tasks that divide --runs {args.runs}; got {args.tasks!r}")
+  return tasks
+
+
+def _without_task(argv: list[str]) -> list[str]:
+  """argv less its --task NAME."""
+  i = argv.index("--task") if "--task" in argv else None
+  return argv if i is None else [*argv[:i], *argv[i + 2:]]
+
+
 def run(args) -> tuple[list[dict], dict]:
-  if args.runs < 2 or not 1 <= args.singles <= args.runs:
-    raise BenchInputError(f"--runs >= 2 and 1 <= --singles <= --runs; got {args.runs} and {args.singles}")
+  tasks = _tasks(args)
+  if args.runs < 2 or not (0 if tasks else 1) <= args.singles <= args.runs:
+    raise BenchInputError(f"--runs >= 2 and 1 <= --singles <= --runs (0 with --tasks); got {args.runs} and {args.singles}")
   work = args.work or tempfile.mkdtemp(prefix="bench-group-")
   base = train_args(args)
+  if tasks:  # the singles and the seeds program: the first task's
+    base = ["--task", tasks[0], *_without_task(base)]
   rows = []
   for seed in range(args.singles):
     rows.append({"mode": "single", "seed": seed, "process_wall_s": round(_timed([*base, "--seed", str(seed)], work,
@@ -60,8 +82,17 @@ def run(args) -> tuple[list[dict], dict]:
   rows.append({"mode": "group", "runs": args.runs,
                "process_wall_s": round(_timed([*base, "--seeds", seeds], work, "group", args.warm), 1)})
   print(rows[-1], flush=True)
-  single = statistics.mean(r["process_wall_s"] for r in rows if r["mode"] == "single")
   group = rows[-1]["process_wall_s"]
-  return rows, {"train_args": base, "runs": args.runs, "single_mean_s": round(single, 1),
-                "group_in_singles": round(group / single, 2), "group_speedup": round(args.runs * single / group, 2),
-                "work": work}
+  summary = {"train_args": base, "runs": args.runs, "work": work}
+  if tasks:
+    seeds = ",".join(map(str, range(args.runs // len(tasks))))
+    spread = ["--tasks", ",".join(tasks), *_without_task(base), "--seeds", seeds]
+    rows.append({"mode": "tasks", "runs": args.runs, "tasks": tasks,
+                 "process_wall_s": round(_timed(spread, work, "tasks", args.warm), 1)})
+    print(rows[-1], flush=True)
+    summary["tasks_in_seeds"] = round(rows[-1]["process_wall_s"] / group, 2)
+  if args.singles:
+    single = statistics.mean(r["process_wall_s"] for r in rows if r["mode"] == "single")
+    summary.update(single_mean_s=round(single, 1), group_in_singles=round(group / single, 2),
+                   group_speedup=round(args.runs * single / group, 2))
+  return rows, summary
