@@ -132,8 +132,7 @@ def test_the_group_bench_with_tasks_times_the_runs_spread_over_them_against_the_
   one program (train.run --tasks), every run its whole budget; tasks_in_seeds from the rows."""
   from train.bench import group as bench_group
   monkeypatch.setattr(bench_group, "TRAIN", (os.path.join(os.path.dirname(__file__), "fake_study_run.py"), "train"))
-  out, work = str(tmp_path / "group.json"), tmp_path / "work"
-  work.mkdir()
+  out, work = str(tmp_path / "group.json"), tmp_path / "work"  # --work made where it is missing
   assert bench_main(["group", "--runs", "4", "--singles", "0", "--tasks", "asc-inc-cog,des-inc-ang", "--steps", "200",
                      "--work", str(work), "--out", out, "--", "--task", "nav", "--algo", "ppo", "--preset", "cpu"]) == 0
   result = json.load(open(out))

@@ -70,6 +70,7 @@ def run(args) -> tuple[list[dict], dict]:
   if args.runs < 2 or not (0 if tasks else 1) <= args.singles <= args.runs:
     raise BenchInputError(f"--runs >= 2 and 1 <= --singles <= --runs (0 with --tasks); got {args.runs} and {args.singles}")
   work = args.work or tempfile.mkdtemp(prefix="bench-group-")
+  os.makedirs(work, exist_ok=True)  # a --work folder that does not exist yet
   base = train_args(args)
   if tasks:  # the singles and the seeds program: the first task's
     base = ["--task", tasks[0], *_without_task(base)]
