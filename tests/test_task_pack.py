@@ -107,6 +107,23 @@ def test_the_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_its_own
       assert got[i][k] == pytest.approx(want[k], rel=2e-3, abs=1e-6), (p.task, k)
 
 
+def test_runs_evaluated_each_by_its_own_evaluator_get_their_own_tasks(program, monkeypatch):
+  """With reward.normalize_penalties (a batch statistic: no shared evaluation), each run's own Brax
+  evaluator is built for its own task and seed."""
+  from train.core import session
+  from train.core.group import group_evaluations
+  t, plans, _ = program
+
+  def normalizing(p):
+    cfg = dataclasses.replace(p.cfg, reward=dataclasses.replace(p.cfg.reward, normalize_penalties=True))
+    return dataclasses.replace(p, cfg=cfg, preset=dataclasses.replace(p.preset, num_evals=2))
+  built = []
+  monkeypatch.setattr(session, "make_evaluator", lambda ti, seed: built.append((ti.plan.cfg.task, seed)))
+  plans = [normalizing(p) for p in plans]
+  shared, each = group_evaluations(dataclasses.replace(t, plan=plans[0]), plans, group_tasks(t, plans))
+  assert shared is None and built == [(ASC, 0), (DES, 1)]
+
+
 @pytest.mark.parametrize("argv, words", [
     (["--tasks", f"{ASC},asc-hard", "--seeds", "0"], "differ in scene.riser"),  # another box pool
     (["--tasks", f"{ASC},{ASC}", "--seeds", "0"], "--tasks takes different task names"),

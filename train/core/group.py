@@ -160,8 +160,9 @@ def group_evaluations(t: Training, plans: list[RunPlan], tasks: TaskData | None 
   evaluator in turn."""
   if not has_evaluations(t):
     return None, [None] * len(plans)
-  if not evaluations_shared(t.plan.cfg):
-    return None, [evaluator_of(t, p.seed) for p in plans]
+  if not evaluations_shared(t.plan.cfg):  # each run's own evaluator, on its own task's scenes
+    return None, [evaluator_of(dataclasses.replace(t, plan=dataclasses.replace(t.plan, cfg=p.cfg, seed=p.seed)))
+                  for p in plans]
   shared = GroupEvaluator(t, [p.seed for p in plans], None if tasks is None else [p.cfg for p in plans])
   return shared, [shared.member(i) for i in range(len(plans))]
 
