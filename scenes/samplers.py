@@ -78,7 +78,8 @@ class Ranges:
 @struct.dataclass
 class Draw:
   """A sampler and its ranges as data: xi ~ U(low, high) if uniform, else the incremental sampler
-  on [low, high] (the hard ends and integer components stay those of the kind's Ranges)."""
+  on [low, high] (the hard ends and integer components stay those of the kind's Ranges); for
+  staircases, also the direction (ascent)."""
 
   low: jax.Array  # (k,) xi_min
   high: jax.Array  # (k,) xi_max

@@ -302,16 +302,16 @@ def test_packs_join_across_tasks_only_where_one_program_takes_their_differences_
   """A pack_tasks group: tasks whose configs differ in data only (sampler, stair direction, reward
   kind) join one pack per set of fresh seeds; a task of another scene kind packs its seeds alone;
   without pack_tasks each task packs its own seeds."""
-  from train.study.spec import pack_args, pack_folders, packs_of
+  from train.study.spec import pack_folders, pack_train_args, packs_of
   group = {**STUDY["groups"][0], "steps": [200], "pack_seeds": True, "pack_tasks": True}
   spec = study_from_dict({**STUDY, "tasks": ["asc-inc-cog", "des-uni-ang", "nav"], "baselines": [], "compare": [],
                           "groups": [group]})
   packs = packs_of(cells(spec))
   assert [[c.id for c in p] for p in packs] == [
       [f"g/{t}/200/s{s}" for t in ("asc-inc-cog", "des-uni-ang") for s in (0, 1)], ["g/nav/200/s0", "g/nav/200/s1"]]
-  args = pack_args(packs[0])
+  args = pack_train_args(packs[0])
   assert args[args.index("--tasks") + 1] == "asc-inc-cog,des-uni-ang" and args[args.index("--seeds") + 1] == "0,1"
-  assert "--task" not in args and "--task" in pack_args(packs[1]) and "--tasks" not in pack_args(packs[1])
+  assert "--task" not in args and "--task" in pack_train_args(packs[1]) and "--tasks" not in pack_train_args(packs[1])
   assert pack_folders(packs[0]) == ["asc-inc-cog/s0", "asc-inc-cog/s1", "des-uni-ang/s0", "des-uni-ang/s1"]
   assert pack_folders(packs[1]) == ["s0", "s1"]
   partial = [c for c in cells(spec) if c.id != "g/des-uni-ang/200/s1"]  # des-uni-ang's seeds differ: not joined

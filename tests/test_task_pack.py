@@ -5,6 +5,7 @@ and Brax evaluation of each run are those of its own task; configs that differ b
 program takes are refused in one line before anything is written."""
 
 import dataclasses
+import json
 import os
 
 import jax
@@ -120,8 +121,27 @@ def test_runs_evaluated_each_by_its_own_evaluator_get_their_own_tasks(program, m
   built = []
   monkeypatch.setattr(session, "make_evaluator", lambda ti, seed: built.append((ti.plan.cfg.task, seed)))
   plans = [normalizing(p) for p in plans]
-  shared, each = group_evaluations(dataclasses.replace(t, plan=plans[0]), plans, group_tasks(t, plans))
+  shared, each = group_evaluations(dataclasses.replace(t, plan=plans[0]), plans, [p.cfg for p in plans])
   assert shared is None and built == [(ASC, 0), (DES, 1)]
+
+
+def test_the_command_trains_each_task_with_each_seed_and_records_each_run_as_its_own(tmp_path, capsys):
+  """train.run --tasks A,B --seeds 0 (no --db): OUT/<task>/s0 each with its run.json, checkpoint
+  and policy; each run's rows (the run, its statistics) in the database beside its task's folder,
+  where `--resume OUT/<task>/s0` finds them."""
+  from train.core.checkpoints import RunCheckpoints
+  from train.db import ExperimentDB, default_path
+  out = tmp_path / "p"
+  assert run.main(["--tasks", f"{ASC},{DES}", "--seeds", "0", *SAC_TINY, "--steps", "64", "--probe-every", "0",
+                   "--out", str(out)]) == 0
+  said = capsys.readouterr().out
+  assert f"{ASC} s0 [train]" in said and f"{DES} s0: 64 steps, done" in said
+  for task in (ASC, DES):
+    folder = out / task / "s0"
+    record = json.load(open(folder / "run.json"))
+    assert (record["task"], record["config"]["task"]) == (task, task) and RunCheckpoints(str(folder)).latest_step() == 64
+    db = ExperimentDB(default_path(str(out / task)))
+    assert [r["run_id"] for r in db.runs()] == [record["run_id"]] and db.stats(record["run_id"])  # its rows, its statistics
 
 
 @pytest.mark.parametrize("argv, words", [

@@ -249,8 +249,8 @@ def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps:
   if configs is None:
     _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core)
     compiled = jax.jit(jax.vmap(lambda params, draw: rollout(params, keys, None, draw)[0], in_axes=(0, None)))
-  else:  # each run's task: its scene's config in the program of cfg0's (scene_programs)
-    draw = stacked([task_data(scene_config(c, scene), core.cfg) for c in configs])
+  else:  # each run's task: its scene's config in the program of cfg0's (scene_programs), as data
+    draw = stacked([task_data(scene_config(c, scene), core.cfg) for c in configs])  # what run() passes
 
     def each(params, task):
       _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core.for_task(task))

@@ -135,7 +135,7 @@ def group_plans(args) -> list[RunPlan]:
                                   ("--library " + str(args.library), args.library not in (None, DEFAULT_LIBRARY)))
          if given]
   if bad:
-    raise RunError(f"--seeds does not go with {', '.join(bad)} (resume each run alone: --resume OUT/s<seed>)")
+    raise RunError(f"--seeds does not go with {', '.join(bad)} (resume each run alone: --resume OUT/[<task>/]s<seed>)")
   try:
     seeds = [int(x) for x in args.seeds.split(",")]
   except ValueError:
@@ -167,7 +167,7 @@ def _run_folder(args, task: str, seed: int) -> str | None:
 
 def _train_group(plans: list[RunPlan], args) -> int:
   """The runs of --seeds in one program (train.core.group): each run's records as a run's own."""
-  from train.core.group import prepare_group, train_group  # noqa: PLC0415
+  from train.core.group import prepare_group, run_tag, several_tasks, train_group  # noqa: PLC0415
   from train.core.interrupts import StopRequest  # noqa: PLC0415
   from train.core.session import SessionOptions, device_summary  # noqa: PLC0415
   p = plans[0]
@@ -187,14 +187,15 @@ def _train_group(plans: list[RunPlan], args) -> int:
       dbs[i].finish(plans[i].run_id, ended[i], final, final.get("step"), _detail(ended[i], stop, plans[i]))
 
     try:
-      finals = train_group(t, plans, dbs[0], stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints), on_end)
+      finals = train_group(t, plans, dbs, stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints), on_end)
     finally:
       for i, (q, db) in enumerate(zip(plans, dbs)):
         if i not in ended:  # the program failed before this run ended
           db.finish(q.run_id, "crashed", {}, None, _detail("crashed", stop, q))
     statuses = [ended[i] for i in range(len(plans))]
+  several = several_tasks(plans)
   for q, final in zip(plans, finals):
-    print(f"{q.task + ' ' if args.tasks else ''}s{q.seed}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
+    print(f"{run_tag(q, several)}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
   if "interrupted" in statuses:
     print("interrupted: checkpoints and policies saved; continue each run alone with:\n"
           + "\n".join(f"  python -m train.run --resume {q.out_dir}" for q in plans), file=sys.stderr, flush=True)

@@ -172,8 +172,9 @@ class TrackedRobotEnv(Env):
   def reset_at(self, rng: jax.Array, eps: jax.Array, penalty_k: jax.Array,
                perturbation: rnd.Perturbation | None = None, draw: Draw | None = None) -> State:
     """Draws a scene at difficulty eps and places the robot at its spawn; with randomization, the
-    episode's perturbation is drawn too (or given). draw: the scene's sampler and ranges as data
-    (where the kind takes them: SceneKind.drawn), instead of the task's."""
+    episode's perturbation is drawn too (or given). draw: the scene's sampler, ranges (and stair
+    direction) as data (where the kind takes them: SceneKind.drawn), instead of the task's; default:
+    a view's (for_task), else the task's own."""
     k_scene, k_obs, k_next = jax.random.split(rng, 3)
     draw = self.task_draw if draw is None else draw
     scene = self.scene.sample(k_scene, eps) if draw is None else self.scene.sample(k_scene, eps, draw)

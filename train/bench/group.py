@@ -53,7 +53,7 @@ def train_args(args) -> list[str]:
 
 
 def _tasks(args) -> list[str]:
-  tasks = args.tasks.split(",") if args.tasks else []
+  tasks = [x.strip() for x in args.tasks.split(",")] if args.tasks else []
   if tasks and (len(set(tasks)) != len(tasks) or len(tasks) < 2 or args.runs % len(tasks)):
     raise BenchInputError(f"--tasks: two or more different tasks that divide --runs {args.runs}; got {args.tasks!r}")
   return tasks

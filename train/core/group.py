@@ -1,5 +1,6 @@
-"""Several runs in one compiled program (`python -m train.run --seeds 0,1,2`): runs that differ
-only in their seed train as one vmapped update on one device. Each run keeps everything a run of
+"""Several runs in one compiled program (`python -m train.run --seeds 0,1,2`, with `--tasks A,B` of
+several tasks): runs that differ only in their seed, or also in their task where the program takes
+the tasks' differences as data (mjx_tracks.envs.task_data), train as one vmapped update on one device. Each run keeps everything a run of
 its own has: its folder (run.json, checkpoints/, policy/, tb/), its database rows, its probe and
 early stop (a finished run is checkpointed and exported at once, its slot computed and
 discarded from then on), its milestones; `python -m train.run --resume
@@ -29,7 +30,7 @@ from train.core.session import SessionOptions, checkpointer_of, evaluator_of, fi
 
 
 class Prefixed:
-  """A text stream that starts each line with a run's tag (its seed), for one shared terminal."""
+  """A text stream that starts each line with a run's tag (run_tag), for one shared terminal."""
 
   def __init__(self, tag: str, stream=None):
     self.tag, self.stream, self.fresh = tag, stream, True
@@ -122,9 +123,14 @@ def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = Non
   return compiled
 
 
-def run_tag(plan: RunPlan, several_tasks: bool) -> str:
+def several_tasks(plans: list[RunPlan]) -> bool:
+  """Whether a program's runs are of several tasks."""
+  return len({p.task for p in plans}) > 1
+
+
+def run_tag(plan: RunPlan, several: bool) -> str:
   """How a program's output names one of its runs: s<seed>, or <task> s<seed> in a program of several tasks."""
-  return f"{plan.task} s{plan.seed}" if several_tasks else f"s{plan.seed}"
+  return f"{plan.task} s{plan.seed}" if several else f"s{plan.seed}"
 
 
 def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions,
@@ -154,33 +160,35 @@ def prepare_group(plans: list[RunPlan]) -> Training:
   return t
 
 
-def group_evaluations(t: Training, plans: list[RunPlan], tasks: TaskData | None = None) -> tuple[GroupEvaluator | None, list]:
+def group_evaluations(t: Training, plans: list[RunPlan], configs: list | None = None) -> tuple[GroupEvaluator | None, list]:
   """(the shared evaluation or None, each run's evaluate(state) or None): every run's Brax evaluation
   in one unroll where their episodes share no statistic (evaluations_shared), else each run's own
-  evaluator in turn."""
+  evaluator in turn; configs: each run's task config where the runs' tasks differ."""
   if not has_evaluations(t):
     return None, [None] * len(plans)
   if not evaluations_shared(t.plan.cfg):  # each run's own evaluator, on its own task's scenes
     return None, [evaluator_of(dataclasses.replace(t, plan=dataclasses.replace(t.plan, cfg=p.cfg, seed=p.seed)))
                   for p in plans]
-  shared = GroupEvaluator(t, [p.seed for p in plans], None if tasks is None else [p.cfg for p in plans])
+  shared = GroupEvaluator(t, [p.seed for p in plans], configs)
   return shared, [shared.member(i) for i in range(len(plans))]
 
 
-def train_group(t: Training, plans: list[RunPlan], db, stop, options: SessionOptions = SessionOptions(),
+def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: SessionOptions = SessionOptions(),
                 on_end: Callable[[int, dict], None] = lambda i, summary: None) -> list[dict[str, Any]]:
   """Trains the runs (t: prepare_group's) as one program until their total steps, early stops or a
-  stop request; each run is checkpointed and exported as it ends, then on_end(its index, its
+  stop request, each run's records in its database (dbs[i]: runs of several tasks have one each
+  beside OUT/<task>); each run is checkpointed and exported as it ends, then on_end(its index, its
   summary) records it (a run that ended stays ended if the program fails later); returns each
   run's summary (as train.core.session.train)."""
   tasks = group_tasks(t, plans)
+  configs = None if tasks is None else [p.cfg for p in plans]  # each run's, where the runs' tasks differ
   states = init_group(t, plans, tasks)
   update = compile_group(t, len(plans), tasks=tasks)
-  evaluate, evaluations = group_evaluations(t, plans, tasks)
-  configs = None if tasks is None else [p.cfg for p in plans]
+  evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
-  parts = [_member(t, p, db, (evaluations[i], probe and probe.member(i)), options,
-                   lambda summary, i=i: on_end(i, summary), run_tag(p, tasks is not None)) for i, p in enumerate(plans)]
+  several = several_tasks(plans)
+  parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
+                   lambda summary, i=i: on_end(i, summary), run_tag(p, several)) for i, p in enumerate(plans)]
   shared = [s for s in (evaluate, probe) if s is not None]
 
   def after_update(states, step: int) -> None:

@@ -15,7 +15,7 @@ import sys
 from mjx_tracks.envs.config import ConfigError
 from train.study.cluster import add_cluster_args
 from train.study.executor import STUDY_DB, cell_folder_of
-from train.study.spec import cells, group_tasks, load_study, pack_args, packs_of, runs_of
+from train.study.spec import cells, group_tasks, load_study, pack_train_args, packs_of, runs_of
 
 
 def parser() -> argparse.ArgumentParser:
@@ -66,7 +66,7 @@ def main(argv=None) -> int:
   for pack in packs_of(runs):
     print(f"{pack[0].id} .. {pack[-1].id} start as one program where none has started yet or the study's "
           f"stop cut them off with no checkpoint (a retry resumes each run alone): python -m "
-          f"train.run {shlex.join(pack_args(pack))} --out SCRATCH --db SCRATCH.sqlite")
+          f"train.run {shlex.join(pack_train_args(pack))} --out SCRATCH --db SCRATCH.sqlite")
   for c in base:
     print(f"{c.id}: python -m train.evaluate {shlex.join([cell_folder_of(folder, c.id), *c.eval_args(spec.eval_trials), '--db', db])}")
   return 0

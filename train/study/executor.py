@@ -19,7 +19,7 @@ from mjx_tracks import atomic
 from train.db import ExperimentDB
 from train.core.plan import DEFAULT_LIBRARY
 from train.core.run_record import read_run_record, run_id_in
-from train.study.spec import Cell, StudySpec, cells, pack_args, pack_folders, packs_of
+from train.study.spec import Cell, StudySpec, cells, pack_folders, pack_train_args, packs_of
 from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, run_pack, unpack
 
 STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
@@ -186,7 +186,7 @@ class StudyRunner:
       self._begin(cid)
       self.state.cells[cid]["attempts"][-1]["pack"] = cids
     key = f"{cids[0]}/attempt-{len(self.state.cells[cids[0]]['attempts'])}+{len(cids) - 1}"
-    future = self.client.submit(run_pack, pack_args(cells), pack_folders(cells),
+    future = self.client.submit(run_pack, pack_train_args(cells), pack_folders(cells),
                                 cells[0].eval_args(self.spec.eval_trials), self.commands,
                                 key=key, pure=False, resources=self._resources(cells[0]))
     self.owners[key] = cids

@@ -116,8 +116,8 @@ class Cell:
     return args
 
   def config(self):
-    """The run's task config with the group's overrides (the preset's aside)."""
-    return load_config(self.task, self.overrides)
+    """The run's task config (run_config)."""
+    return run_config(self.task, self.algo, self.preset, self.library, self.overrides)
 
   @property
   def pack_key(self) -> "Cell":
@@ -172,12 +172,17 @@ def group_tasks(spec: StudySpec, g: GroupSpec) -> tuple[str, ...]:
   return g.tasks or spec.tasks
 
 
+def run_config(task: str, algo: str, preset: str, library: str, overrides: tuple[str, ...]):
+  """A run's task config: the task's with its preset's overrides, then its group's (as train.run's plan)."""
+  return load_config(task, tuple(get_preset(algo, preset, library).config_overrides) + tuple(overrides))
+
+
 def _check_runs(spec: StudySpec) -> None:
   """Every task's config takes every group's overrides and early stop."""
   for i, g in enumerate(spec.groups):
     for task in group_tasks(spec, g):
       try:
-        cfg = load_config(task, tuple(get_preset(g.algo, g.preset, g.library).config_overrides) + g.set)
+        cfg = run_config(task, g.algo, g.preset, g.library, g.set)
         if g.early_stop:
           parse_early_stop(g.early_stop, cfg)
         if spec.robustness:  # its cases fit the task (e.g. a latency of at most a control period)
@@ -274,7 +279,7 @@ def _joins(pack: list[Cell], seeds: list[Cell]) -> bool:
           and packing_conflict(a.config(), b.config()) is None)
 
 
-def pack_args(pack: list[Cell]) -> list[str]:
+def pack_train_args(pack: list[Cell]) -> list[str]:
   """`python -m train.run` arguments of a pack (packs_of), less its folder and database."""
   tasks = list(dict.fromkeys(c.task for c in pack))
   return pack[0].pack_args(list(dict.fromkeys(c.seed for c in pack)), tasks)

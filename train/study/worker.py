@@ -145,13 +145,13 @@ def _evaluate_side_by_side(folders: dict[str, str], eval_args: list[str], comman
   env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}
   procs, done = {}, {}
   try:
-    for s, folder in folders.items():
-      with open(os.path.join(scratch, f"evaluate-{s.replace(os.sep, '-')}.log"), "w") as log:
+    for m, folder in folders.items():
+      with open(os.path.join(scratch, f"evaluate-{m.replace(os.sep, '-')}.log"), "w") as log:
         argv = _evaluate_argv(command, folder, eval_args, os.path.join(folder, RUN_DB))
-        procs[s] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
+        procs[m] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
   finally:
-    for s, (proc, name) in procs.items():
-      done[s] = ("evaluate", proc.wait(), open(name).read())
+    for m, (proc, name) in procs.items():
+      done[m] = ("evaluate", proc.wait(), open(name).read())
   return done
 
 
