@@ -144,6 +144,24 @@ def test_the_command_trains_each_task_with_each_seed_and_records_each_run_as_its
     assert [r["run_id"] for r in db.runs()] == [record["run_id"]] and db.stats(record["run_id"])  # its rows, its statistics
 
 
+def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):
+  """scripts/analysis/group_memory.py: the update's arguments as XLA plans them are the runs' states
+  as the project counts them (train.core.group.state_bytes); a program that cannot be is refused."""
+  import importlib.util
+  import re
+  path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "analysis", "group_memory.py")
+  spec = importlib.util.spec_from_file_location("group_memory", path)
+  script = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(script)
+  assert script.main(["--tasks", f"{ASC},{DES}", "--seeds", "0", *SAC_TINY]) == 0
+  said = capsys.readouterr().out
+  scale = {"GB": 1e9, "MB": 1e6}
+  states, arguments = (float(x) * scale[unit] for x, unit in
+                       re.findall(r"(?:states|arguments) ([\d.]+) ([GM]B)", said))
+  assert "2 runs of 8 envs" in said and states > 0 and arguments == pytest.approx(states, rel=0.01, abs=6e3)
+  assert script.main(["--tasks", f"{ASC},asc-hard", "--seeds", "0", *SAC_TINY]) == 2
+
+
 @pytest.mark.parametrize("argv, words", [
     (["--tasks", f"{ASC},asc-hard", "--seeds", "0"], "differ in scene.riser"),  # another box pool
     (["--tasks", f"{ASC},{ASC}", "--seeds", "0"], "--tasks takes different task names"),

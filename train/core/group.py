@@ -107,20 +107,23 @@ def init_group(t: Training, plans: list[RunPlan], tasks: TaskData | None):
   return jax.jit(jax.vmap(lambda k, d: learner_on(t, d).init(k)))(keys, tasks)
 
 
+def lower_group(t: Training, n: int, tasks: TaskData | None = None):
+  """The vmapped update of n runs (tasks: their tasks as data, group_tasks), lowered with the
+  states donated: update(states) or, with tasks, update(states, tasks)."""
+  shaped = jax.tree_util.tree_map(lambda a: jax.ShapeDtypeStruct((n,) + a.shape, a.dtype), t.abstract)
+  if tasks is None:
+    return jax.jit(jax.vmap(t.learner.update), donate_argnums=0).lower(shaped)
+  return jax.jit(jax.vmap(lambda s, d: learner_on(t, d).update(s)), donate_argnums=0).lower(shaped, tasks)
+
+
 def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = None):
-  """update(states) of n runs (tasks: their tasks as data, group_tasks), vmapped and compiled ahead
-  of time with the states donated."""
+  """update(states) of n runs (lower_group's), compiled ahead of time."""
   stream = stream or sys.stdout  # as it is now (a test's capture), not as it was at import
   print(f"compiling the training step of {n} runs in one program ...", file=stream, flush=True)
   t0 = time.time()
-  shaped = jax.tree_util.tree_map(lambda a: jax.ShapeDtypeStruct((n,) + a.shape, a.dtype), t.abstract)
-  if tasks is None:
-    compiled = jax.jit(jax.vmap(t.learner.update), donate_argnums=0).lower(shaped).compile()
-  else:
-    update = jax.jit(jax.vmap(lambda s, d: learner_on(t, d).update(s)), donate_argnums=0).lower(shaped, tasks).compile()
-    compiled = lambda states: update(states, tasks)  # noqa: E731
+  compiled = lower_group(t, n, tasks).compile()
   print(f"compiled in {time.time() - t0:,.0f} s", file=stream, flush=True)
-  return compiled
+  return compiled if tasks is None else (lambda states: compiled(states, tasks))
 
 
 def several_tasks(plans: list[RunPlan]) -> bool:
