@@ -114,7 +114,12 @@ def has_evaluations(t: Training) -> bool:
 
 def eval_env(t: Training):
   """The batched environment Brax's evaluator plays: uniform scenes over the task's ranges."""
-  return batched_env(TrackedRobotEnv(eval_config(t.plan.cfg)))
+  return batched_env(eval_core(t))
+
+
+def eval_core(t: Training) -> TrackedRobotEnv:
+  """The environment of Brax's evaluator's episodes, unbatched."""
+  return TrackedRobotEnv(eval_config(t.plan.cfg))
 
 
 def eval_config(cfg):

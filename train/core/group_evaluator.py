@@ -20,9 +20,8 @@ from brax.envs.wrappers.training import EvalWrapper
 from brax.training import acting
 
 from mjx_tracks.envs.task_data import stacked, task_data
-from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
-from train.core.build import Training, eval_config, eval_env, eval_key
+from train.core.build import Training, eval_config, eval_core, eval_env, eval_key
 from train.core.group_loop import AllRuns
 from train.core.mesh import to_host
 
@@ -78,7 +77,7 @@ def _unroll(t: Training, runs: int, episodes: int, length: int, make, configs: l
   if configs is None:
     env = EvalWrapper(eval_env(t))
     return lambda params, unroll_keys: play(env, params, unroll_keys, runs)
-  core = TrackedRobotEnv(eval_config(t.plan.cfg))
+  core = eval_core(t)
   tasks = stacked([task_data(eval_config(c), core.cfg) for c in configs])
 
   def each(params, unroll_key, task):  # one run's episodes on its own task's scenes

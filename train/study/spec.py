@@ -104,17 +104,6 @@ class Cell:
       args += ["--milestones", ",".join(map(str, self.milestones))]
     return args + ["--early-stop", self.early_stop or NO_EARLY_STOP]  # the group's, not the preset's
 
-  def pack_args(self, seeds: list[int], tasks: list[str] | None = None) -> list[str]:
-    """`python -m train.run` arguments of this cell's pack: its own, with --seeds S,S,... for --seed
-    (and --tasks T,T,... for --task where the pack spans several tasks)."""
-    args = self.train_args()
-    i = args.index("--seed")
-    args = [*args[:i], "--seeds", ",".join(map(str, seeds)), *args[i + 2:]]
-    if tasks is not None and len(tasks) > 1:
-      i = args.index("--task")
-      args = [*args[:i], "--tasks", ",".join(tasks), *args[i + 2:]]
-    return args
-
   def config(self):
     """The run's task config (run_config)."""
     return run_config(self.task, self.algo, self.preset, self.library, self.overrides)
@@ -280,9 +269,13 @@ def _joins(pack: list[Cell], seeds: list[Cell]) -> bool:
 
 
 def pack_train_args(pack: list[Cell]) -> list[str]:
-  """`python -m train.run` arguments of a pack (packs_of), less its folder and database."""
-  tasks = list(dict.fromkeys(c.task for c in pack))
-  return pack[0].pack_args(list(dict.fromkeys(c.seed for c in pack)), tasks)
+  """`python -m train.run` arguments of a pack (packs_of), less its folder and database: its first
+  cell's, with --seeds S,S,... for --seed (and --tasks T,T,... for --task where it spans several tasks)."""
+  def swapped(args: list[str], flag: str, plural: str, values) -> list[str]:
+    i = args.index(flag)
+    return [*args[:i], plural, ",".join(map(str, dict.fromkeys(values))), *args[i + 2:]]
+  args = swapped(pack[0].train_args(), "--seed", "--seeds", (c.seed for c in pack))
+  return swapped(args, "--task", "--tasks", (c.task for c in pack)) if len({c.task for c in pack}) > 1 else args
 
 
 def pack_folders(pack: list[Cell]) -> list[str]:
