@@ -4,7 +4,7 @@
 # own process session (setsid), so it keeps running between calls that follow each other while the
 # machine stays warm; every call then waits WAIT seconds (or until the study ends), packing the
 # study folder (without checkpoints), its log and the logs of the attempts still running (a pack of
-# seeds: its training and evaluation logs) into
+# seeds: its training and evaluation logs, and its ended runs' exported policies and records) into
 # $OUT/$STUDY-study.tgz every 30 s and at the end. Afterwards, anywhere:
 # `python -m train.study report $STUDY --root DIR`.
 # FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
@@ -56,8 +56,10 @@ start() {
 
 pack() {
   cp "$log" "$root/$study/study.log" 2>/dev/null
+  # a pack's runs stay in /tmp/study-pack-* until its evaluations end: their exported policies and
+  # records come back too, so a machine that goes back mid-evaluation loses no trained policy
   (cd /tmp && tar czf "$OUT/$study-study.tgz.tmp" --exclude=checkpoints "studies/$study" study-cell-*/attempt.log \
-     study-pack-*/*.log 2>/dev/null)
+     study-pack-*/*.log study-pack-*/pack/*/policy study-pack-*/pack/*/*.json 2>/dev/null)
   mv "$OUT/$study-study.tgz.tmp" "$OUT/$study-study.tgz"
 }
 
