@@ -62,8 +62,8 @@ def probability_of_improvement(scores_x: np.ndarray, scores_y: np.ndarray) -> fl
     elif np.isnan(a).any() or np.isnan(b).any():
       per_task.append(np.nan)
     else:
-      pairs = a[:, None] - b[None, :]
-      per_task.append((np.count_nonzero(pairs > 0) + 0.5 * np.count_nonzero(pairs == 0)) / (a.size * b.size))
+      above, tied = np.count_nonzero(a[:, None] > b[None, :]), np.count_nonzero(a[:, None] == b[None, :])
+      per_task.append((above + 0.5 * tied) / (a.size * b.size))
   return float(np.mean(per_task))
 
 
