@@ -18,6 +18,9 @@
 # bring the working tree again, never change the code of a study under way.
 # Extra arguments go to `python -m train.study`, e.g. --set 'tasks=[asc-inc-cog, asc-uni-cog]'.
 # Usage: [STUDY=paper] WAIT=560 [SLOTS_PER_GPU=1] CPU_SLOTS=20 [FROM=FOLDER] bash scripts/gpu/study.sh [ARGS]
+# A lent machine goes back after ~30 s without a call and after 30 minutes held: chain calls at once, and
+# a study longer than what is left of the machine's 30 minutes loses its running attempts (their
+# checkpoints stay on the machine; a pack's ended runs' policies and records come back, above).
 # Programs side by side on one GPU time-slice it (8 SAC packs at once: each 14x slower than alone;
 # two 5-seed PPO packs: nothing finished in 18 min): keep SLOTS_PER_GPU=1 unless runs are tiny.
 set -uo pipefail
