@@ -30,7 +30,7 @@ from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
 from train.core.presets import SB3
-from train.core.run_record import seed_folder
+from train.core.run_record import seed_folder, several_tasks
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RESUMABLE, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
@@ -167,7 +167,7 @@ def _run_folder(args, task: str, seed: int) -> str | None:
 
 def _train_group(plans: list[RunPlan], args) -> int:
   """The runs of --seeds in one program (train.core.group): each run's records as a run's own."""
-  from train.core.group import prepare_group, run_tag, several_tasks, train_group  # noqa: PLC0415
+  from train.core.group import prepare_group, run_tag, train_group  # noqa: PLC0415
   from train.core.interrupts import StopRequest  # noqa: PLC0415
   from train.core.session import SessionOptions, device_summary  # noqa: PLC0415
   p = plans[0]

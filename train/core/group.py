@@ -26,6 +26,7 @@ from train.core.group_loop import GroupLoop, Member
 from train.core.plan import RunError, RunPlan
 from train.core.probe import GroupProbe
 from train.core.progress import Reporter
+from train.core.run_record import several_tasks
 from train.core.session import SessionOptions, checkpointer_of, evaluator_of, finish_run, schedule_of
 
 
@@ -124,11 +125,6 @@ def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = Non
   compiled = lower_group(t, n, tasks).compile()
   print(f"compiled in {time.time() - t0:,.0f} s", file=stream, flush=True)
   return compiled if tasks is None else (lambda states: compiled(states, tasks))
-
-
-def several_tasks(plans: list[RunPlan]) -> bool:
-  """Whether a program's runs are of several tasks."""
-  return len({p.task for p in plans}) > 1
 
 
 def run_tag(plan: RunPlan, several: bool) -> str:

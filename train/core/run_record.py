@@ -43,6 +43,12 @@ def seed_folder(out: str, seed: int, task: str | None = None) -> str:
   return os.path.join(out, f"s{seed}") if task is None else os.path.join(out, task, f"s{seed}")
 
 
+def several_tasks(runs) -> bool:
+  """Whether the runs of one program (anything with a `task`: plans, a study's cells) are of several
+  tasks: then each run's folder is OUT/<task>/s<seed> (seed_folder) and train.run takes --tasks."""
+  return len({r.task for r in runs}) > 1
+
+
 def run_id_in(run_dir: str) -> str | None:
   """The run id a run folder records, if it has a readable record yet."""
   try:

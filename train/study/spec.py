@@ -14,7 +14,7 @@ from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, M
 from train.core.early_stop import NO_EARLY_STOP, parse_early_stop
 from train.evaluation import EVAL_TRIALS, robustness_scenes, scene_config
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
-from train.core.run_record import seed_folder
+from train.core.run_record import seed_folder, several_tasks
 from train.core.presets import SB3, get_preset, with_hyperparams
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES),
@@ -275,12 +275,12 @@ def pack_train_args(pack: list[Cell]) -> list[str]:
     i = args.index(flag)
     return [*args[:i], plural, ",".join(map(str, dict.fromkeys(values))), *args[i + 2:]]
   args = swapped(pack[0].train_args(), "--seed", "--seeds", (c.seed for c in pack))
-  return swapped(args, "--task", "--tasks", (c.task for c in pack)) if len({c.task for c in pack}) > 1 else args
+  return swapped(args, "--task", "--tasks", (c.task for c in pack)) if several_tasks(pack) else args
 
 
 def pack_folders(pack: list[Cell]) -> list[str]:
   """Each cell's run folder in its pack's output folder (train.core.run_record.seed_folder)."""
-  several = len({c.task for c in pack}) > 1
+  several = several_tasks(pack)
   return [seed_folder("", c.seed, c.task if several else None) for c in pack]
 
 
