@@ -7,8 +7,9 @@ run as one program per area and setting. Per run, area and setting: success, col
 (neither reaching the goal, colliding nor tipping over), the fraction of steps the filter acted; and
 trial by trial against the run as configured, the collisions each variant removed and the successes
 it cost. Prints a line per row and writes JSON with the device, command and date.
-On a CPU, give one run per process: five runs' policies in one program stopped for good there
-(0 % CPU inside XLA's execution, 5 tries of 5; results/nav/README.md, 2026-11-28); one ran through.
+On a CPU with jaxlib < 0.11.2, give one run per process: five runs' policies in one program stopped
+for good there, 6 tries of 6 (jaxlib's batched LAPACK calls deadlock XLA:CPU's intra-op pool;
+results/nav/README.md, 2026-11-28); one ran through.
 
 python scripts/analysis/nav_safety_filter.py RUN [RUN ...] [--areas nav/zigzag,nav/hallway] \
     [--trials 100] [--variant "NAME:control.safety_filter.KEY=VALUE;..." ...] --out FILE
