@@ -1,7 +1,8 @@
 """A stand-in for `train.run` / `train.evaluate` in study tests (no JAX): `train ARGS` makes a run
 folder with a checkpoint every 100 steps (0.1 s each) and records the run and one statistics row per
 checkpoint in its database (with --seeds S,S,..., one folder OUT/s<seed> per seed, with --tasks T,T,...
-OUT/<task>/s<seed>, side by side; each run.json lists its sessions' seeds (and tasks) under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
+OUT/<task>/s<seed>, with --early-stops C,C,... OUT/stop-<criterion>/... (train.core.run_record.seed_folder),
+side by side; each run.json lists its sessions' seeds (and tasks, early stops) under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
 scene of fake_success() and writes eval-hardest.json (with --baseline NAME --task TASK, first a run
 record of its own). FAKE_CRASH_SEED: that seed's first session
 exits 1 after its checkpoint at FAKE_CRASH_STEP (default 100); FAKE_EARLY_SEED: that seed's run stops
@@ -15,6 +16,7 @@ import signal
 import sys
 import time
 
+from train.core.run_record import seed_folder
 from train.db import ExperimentDB
 
 SCENES = ("hardest", "uniform", "held-out/middle")
@@ -36,8 +38,9 @@ def _begin(a, out: str, seed: str, task: str, db: ExperimentDB) -> dict:
     meta = {"run_id": f"{task}-s{seed}-{time.time_ns()}", "task": task, "seed": int(seed),
             "steps": int(a.steps), "total_steps": int(a.steps), "sessions": 0, "milestones": [int(m) for m in (a.milestones or "").split(",") if m]}
   meta["sessions"] += 1
-  # the seeds (and tasks) each session trained in one process
-  meta.setdefault("programs", []).append(a.seeds + (f" x {a.tasks}" if a.tasks else "") if a.seeds else str(meta["seed"]))
+  # the seeds (and tasks, early stops) each session trained in one process
+  program = a.seeds + "".join(f" x {x}" for x in (a.tasks, a.early_stops) if x) if a.seeds else str(meta["seed"])
+  meta.setdefault("programs", []).append(program)
   db.start(meta["run_id"], meta["task"], "ppo", "cpu", meta["seed"], {}, out, meta["steps"])
   os.makedirs(os.path.join(out, "checkpoints"), exist_ok=True)
   json.dump(meta, open(meta_path, "w"))
@@ -73,10 +76,10 @@ def _goes_on(meta: dict, step: int) -> bool:
 
 def train(argv: list[str]) -> int:
   """One run (--seed), or several side by side in OUT/s<seed> (--seeds S,S,...; with --tasks T,T,...
-  OUT/<task>/s<seed>) with one database."""
+  OUT/<task>/s<seed>, with --early-stops OUT/stop-<criterion>/...) with one database."""
   p = argparse.ArgumentParser()
   for name in ("--task", "--tasks", "--algo", "--preset", "--steps", "--seed", "--seeds", "--out", "--db", "--resume",
-               "--early-stop", "--milestones"):
+               "--early-stop", "--early-stops", "--milestones"):
     p.add_argument(name)
   p.add_argument("--set", action="append", default=[])
   a = p.parse_args(argv)
@@ -84,8 +87,9 @@ def train(argv: list[str]) -> int:
   if a.resume:
     runs = [(a.resume, a.seed, json.load(open(os.path.join(a.resume, "run.json")))["task"])]
   elif a.seeds:
-    tasks = a.tasks.split(",") if a.tasks else [a.task]
-    runs = [(os.path.join(a.out, *([t] if a.tasks else []), f"s{s}"), s, t) for t in tasks for s in a.seeds.split(",")]
+    tasks, stops = (a.tasks or a.task).split(","), (a.early_stops or a.early_stop).split(",")
+    runs = [(seed_folder(a.out, s, t if a.tasks else None, stop if a.early_stops else None), s, t)
+            for stop in stops for t in tasks for s in a.seeds.split(",")]
   else:
     runs = [(a.out, a.seed, a.task)]
   metas = [(_begin(a, out, seed, task, db), out) for out, seed, task in runs]

@@ -276,22 +276,23 @@ def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_ow
   assert starts[1] < ends[0]  # the two packs ran at once
 
 
-def test_a_pack_of_tasks_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):
+def test_a_pack_of_tasks_and_groups_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):
   """pack_tasks: the packs of seeds of a group's tasks that one program can take as data (here the
-  sampler) are one train.run --tasks ... --seeds ... process; each run comes back in its own
-  folder with its own records and evaluation."""
-  study = {**STUDY, "baselines": [], "compare": [], "groups": [{**STUDY["groups"][0], "steps": [200],
-                                                                "pack_seeds": True, "pack_tasks": True}]}
+  sampler), and of a second group that differs only in its early stop, are one train.run --tasks ...
+  --seeds ... --early-stops ... process; each run comes back in its own folder with its own records
+  and evaluation."""
+  group = {**STUDY["groups"][0], "budgets": "runs", "steps": [200], "pack_seeds": True, "pack_tasks": True}
+  study = {**STUDY, "baselines": [], "compare": [], "groups": [group, {**group, "name": "r", "early_stop": "return"}]}
   spec, folder = study_from_dict(study), str(tmp_path / "study")
   with local_cluster(_workers(tmp_path, slow="", FAKE_CRASH_SEED="")) as cluster, Client(cluster) as client:
     counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=io.StringIO()).run()
-  assert counts == {"done": 4, "running": 0, "queued": 0, "failed": 0}
+  assert counts == {"done": 8, "running": 0, "queued": 0, "failed": 0}
   state = json.load(open(os.path.join(folder, "state.json")))["cells"]
   db = ExperimentDB(os.path.join(folder, STUDY_DB))
   for c in cells(spec):
     meta = json.load(open(os.path.join(cell_folder(folder, c), "run.json")))
-    assert state[c.id]["attempts"][0]["pack"] == [f"g/{t}/200/s{s}" for t in spec.tasks for s in (0, 1)]
-    assert (meta["task"], meta["seed"], meta["programs"]) == (c.task, c.seed, ["0,1 x asc-inc-cog,asc-uni-cog"])
+    assert state[c.id]["attempts"][0]["pack"] == [f"{g}/{t}/200/s{s}" for g in "gr" for t in spec.tasks for s in (0, 1)]
+    assert (meta["task"], meta["seed"], meta["programs"]) == (c.task, c.seed, ["0,1 x asc-inc-cog,asc-uni-cog x none,return"])
     own = ExperimentDB(os.path.join(cell_folder(folder, c), "run.sqlite")).runs()
     assert [r["run_id"] for r in own] == [meta["run_id"]]
     trials = [e for e in db.evals(meta["run_id"]) if e["scene"] == "hardest"]
@@ -320,6 +321,31 @@ def test_packs_join_across_tasks_only_where_one_program_takes_their_differences_
   assert [len(p) for p in packs_of(cells(alone))] == [2, 2]
   with pytest.raises(ConfigError, match=r"groups\[0\]\.pack_tasks"):
     study_from_dict({**STUDY, "groups": [{**group, "pack_seeds": False}]})
+
+
+def test_packs_join_across_groups_only_where_they_differ_in_their_early_stop_alone():
+  """Groups whose runs differ only in their early stop (and name), with the same tasks and seeds,
+  join one pack (train.run --early-stops, each run in stop-<criterion>/); groups that differ in
+  anything else, in their seeds, or not in their early stop keep packs of their own."""
+  from train.study.spec import pack_folders, pack_train_args, packs_of
+  group = {**STUDY["groups"][0], "budgets": "runs", "steps": [200], "pack_seeds": True, "pack_tasks": True}
+  study = {**STUDY, "baselines": [], "compare": []}
+
+  def packs(*groups):
+    return [[c.id for c in p] for p in packs_of(cells(study_from_dict({**study, "groups": list(groups)})))]
+  two = (group, {**group, "name": "r", "early_stop": "return"})
+  assert packs(*two) == [[f"{g}/{t}/200/s{s}" for g in "gr" for t in STUDY["tasks"] for s in (0, 1)]]
+  [pack] = packs_of(cells(study_from_dict({**study, "groups": list(two)})))
+  args = pack_train_args(pack)
+  assert args[args.index("--early-stops") + 1] == "none,return" and "--early-stop" not in args
+  assert pack_folders(pack)[:2] == ["stop-none/asc-inc-cog/s0", "stop-none/asc-inc-cog/s1"]
+  assert pack_folders(pack)[-1] == "stop-return/asc-uni-cog/s1"
+  for other in ({"early_stop": "", "name": "same"}, {"set": ["reward.cog_scale=0.5"]}, {"steps": [300]},
+                {"tasks": ["asc-inc-cog"]}, {"pack_tasks": False}):
+    found = packs(group, {**two[1], **other})
+    assert len(found) >= 2 and all(len({cid.split("/")[0] for cid in p}) == 1 for p in found), other
+  partial = [c for c in cells(study_from_dict({**study, "groups": list(two)})) if c.id != "r/asc-uni-cog/200/s1"]
+  assert [len(p) for p in packs_of(partial)] == [4, 2]  # r's seeds differ on asc-uni-cog: its own packs
 
 
 def test_seeds_are_packed_only_for_this_projects_trainer():

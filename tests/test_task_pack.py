@@ -1,4 +1,5 @@
-"""Runs of several tasks in one program (`train.run --tasks A,B --seeds ...`; mjx_tracks.envs.task_data):
+"""Runs of several tasks in one program (`train.run --tasks A,B --seeds ...`; mjx_tracks.envs.task_data)
+and of several early stops (`--early-stops`):
 each run's view of the program's environment starts, steps and rewards as its own task's
 environment does; each run starts from the state it would start from alone; the program's probe
 and Brax evaluation of each run are those of its own task; configs that differ beyond the data a
@@ -125,23 +126,33 @@ def test_runs_evaluated_each_by_its_own_evaluator_get_their_own_tasks(program, m
   assert shared is None and built == [(ASC, 0), (DES, 1)]
 
 
-def test_the_command_trains_each_task_with_each_seed_and_records_each_run_as_its_own(tmp_path, capsys):
-  """train.run --tasks A,B --seeds 0 (no --db): OUT/<task>/s0 each with its run.json, checkpoint
-  and policy; each run's rows (the run, its statistics) in the database beside its task's folder,
-  where `--resume OUT/<task>/s0` finds them."""
+def test_the_command_trains_each_task_with_each_seed_and_early_stop_and_records_each_run_as_its_own(tmp_path, capsys):
+  """train.run --tasks A,B --seeds 0 --early-stops C,none (no --db), as a study packs two groups that
+  differ only in their early stop: each run in the folder the study looks for (OUT/stop-<criterion>/
+  <task>/s0), with its run.json, checkpoint and policy; each run's rows (the run, its statistics) in
+  the database beside its task's folder, where `--resume OUT/...` finds them; the runs under the
+  criterion (met at the first report) stop there, the others train every step."""
   from train.core.checkpoints import RunCheckpoints
   from train.db import ExperimentDB, default_path
+  from train.study.spec import cells, pack_folders, pack_train_args, packs_of, study_from_dict
+  group = {"algo": "sac", "preset": "cpu", "steps": [256], "set": list(TINY_SETTINGS), "pack_seeds": True,
+           "pack_tasks": True, "hp": ["training_metrics_steps=64"]}
+  spec = study_from_dict({"name": "p", "tasks": [ASC, DES], "seeds": [0], "baselines": [], "groups": [
+      {**group, "name": "first", "early_stop": "return=-1000"}, {**group, "name": "whole"}]})
+  [pack] = packs_of(cells(spec))
   out = tmp_path / "p"
-  assert run.main(["--tasks", f"{ASC},{DES}", "--seeds", "0", *SAC_TINY, "--steps", "64", "--probe-every", "0",
-                   "--out", str(out)]) == 0
+  assert run.main([*pack_train_args(pack), "--probe-every", "0", "--out", str(out)]) == 0
   said = capsys.readouterr().out
-  assert f"{ASC} s0 [train]" in said and f"{DES} s0: 64 steps, done" in said
-  for task in (ASC, DES):
-    folder = out / task / "s0"
+  assert f"none {ASC} s0 [train]" in said and f"return=-1000 {DES} s0: 64 steps, stopped_early" in said
+  for cell, member in zip(pack, pack_folders(pack)):
+    folder = out / member
     record = json.load(open(folder / "run.json"))
-    assert (record["task"], record["config"]["task"]) == (task, task) and RunCheckpoints(str(folder)).latest_step() == 64
-    db = ExperimentDB(default_path(str(out / task)))
+    steps = 256 if cell.group == "whole" else 64
+    assert (record["task"], record["config"]["task"]) == (cell.task, cell.task)
+    assert RunCheckpoints(str(folder)).latest_step() == steps
+    db = ExperimentDB(default_path(str(folder.parent)))
     assert [r["run_id"] for r in db.runs()] == [record["run_id"]] and db.stats(record["run_id"])  # its rows, its statistics
+    assert db.run(record["run_id"])["status"] == ("done" if cell.group == "whole" else "stopped_early")
 
 
 def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):
@@ -166,7 +177,11 @@ def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):
     (["--tasks", f"{ASC},asc-hard", "--seeds", "0"], "differ in scene.riser"),  # another box pool
     (["--tasks", f"{ASC},{ASC}", "--seeds", "0"], "--tasks takes different task names"),
     (["--tasks", f"{ASC},{DES}"], "--tasks needs --seeds"),
-    (["--tasks", f"{ASC},{DES}", "--task", ASC, "--seeds", "0"], "instead of --task")])
+    (["--tasks", f"{ASC},{DES}", "--task", ASC, "--seeds", "0"], "instead of --task"),
+    (["--task", ASC, "--early-stops", "return,none"], "--early-stops needs --seeds"),
+    (["--task", ASC, "--seeds", "0", "--early-stops", "return,return"], "--early-stops takes different criteria"),
+    (["--task", ASC, "--seeds", "0", "--early-stops", "return,none", "--early-stop", "none"], "instead of --early-stop"),
+    (["--task", ASC, "--seeds", "0", "--early-stops", "return,sometime"], "sometime")])
 def test_tasks_one_program_cannot_hold_are_refused_in_one_line_before_anything_is_written(argv, words, tmp_path, capsys):
   assert run.main([*argv, *SAC_TINY, "--steps", "64", "--out", str(tmp_path / "g")]) == 2
   err = capsys.readouterr().err

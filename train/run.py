@@ -9,6 +9,8 @@
     python -m train.run --task asc-inc-cog --library brax       # Brax's own ppo.train (no checkpoints)
     python -m train.run --task nav --seeds 0,1,2,3,4 --out runs/nav  # 5 runs in one program: runs/nav/s0 ...
     python -m train.run --tasks asc-inc-cog,des-inc-ang --seeds 0,1 --out runs/p  # 4 runs: runs/p/asc-inc-cog/s0 ...
+    python -m train.run --task asc-inc-cog --algo sac --preset paper --seeds 0,1 --early-stops return,none --out runs/e
+                                                                # 4 runs: runs/e/stop-return/s0 ... runs/e/stop-none/s1
 
 Writes into the run directory: run.json, checkpoints/ (orbax, the whole training state, every
 --checkpoint-every seconds and at the end), policy/ (the exported policy), tb/ (TensorBoard);
@@ -30,7 +32,7 @@ from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
 from train.core.presets import SB3
-from train.core.run_record import seed_folder, several_tasks
+from train.core.run_record import seed_folder
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RESUMABLE, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
 
 STATUS = {"done": "done", "early_stop": "stopped_early", "interrupted": "interrupted"}  # loop's reason -> db status
@@ -70,6 +72,10 @@ def parser() -> argparse.ArgumentParser:
                       f"probe's success reaches {EARLY_STOP_SUCCESS} in {EARLY_STOP_TIMES['success']} probes "
                       "in a row), or either with =THRESHOLD[xN] (N reports in a row); 'none': train every "
                       "step (default: the preset's: PPO gpu stops at 'success' on tasks with a hardest scene)")
+  p.add_argument("--early-stops", metavar="CRITERION,CRITERION",
+                 help="instead of --early-stop, with --seeds: each criterion (as --early-stop takes it, 'none' "
+                      "included) with each task and seed, all in one program, each run in "
+                      "OUT/stop-<criterion>/[<task>/]s<seed>")
   p.add_argument("--probe-every", type=int, metavar="STEPS",
                  help="steps between evaluations on the hardest staircase (the trials of train.evaluate "
                       "--scene hardest); 0: none (default: the preset's, stair tasks only)")
@@ -140,12 +146,14 @@ def group_plans(args) -> list[RunPlan]:
     seeds = [int(x) for x in args.seeds.split(",")]
   except ValueError:
     raise RunError(f"--seeds takes whole numbers separated by commas, e.g. 0,1,2; got {args.seeds!r}") from None
-  tasks = _tasks(args)
-  if len(set(seeds)) != len(seeds) or len(seeds) * len(tasks) < 2:
-    raise RunError(f"--seeds needs at least two different seeds (or --tasks two tasks); got {args.seeds!r}")
+  tasks, stops = _tasks(args), _early_stops(args)
+  if len(set(seeds)) != len(seeds) or len(seeds) * len(tasks) * len(stops) < 2:
+    raise RunError(f"--seeds needs at least two different seeds (or --tasks two tasks, or --early-stops two "
+                   f"criteria); got {args.seeds!r}")
   return [plan_run(argparse.Namespace(**{**vars(args), "task": task, "tasks": None, "seed": s, "seeds": None,
-                                         "out": _run_folder(args, task, s)}))
-          for task in tasks for s in seeds]
+                                         "early_stop": stop, "early_stops": None,
+                                         "out": _run_folder(args, task, s, stop)}))
+          for stop in stops for task in tasks for s in seeds]
 
 
 def _tasks(args) -> list[str]:
@@ -158,16 +166,29 @@ def _tasks(args) -> list[str]:
   return tasks
 
 
-def _run_folder(args, task: str, seed: int) -> str | None:
-  """A run's folder in a program: OUT/s<seed>, with --tasks OUT/<task>/s<seed>; None without --out."""
+def _early_stops(args) -> list[str | None]:
+  """The early stops of a program's runs: --early-stops C,C,... (different ones, not with --early-stop),
+  or --early-stop's (None: the preset's)."""
+  if args.early_stops is None:
+    return [args.early_stop]
+  stops = [x.strip() for x in args.early_stops.split(",")]
+  if args.early_stop is not None or not all(stops) or len(set(stops)) != len(stops):
+    raise RunError(f"--early-stops takes different criteria separated by commas, instead of --early-stop; "
+                   f"got {args.early_stops!r}")
+  return stops
+
+
+def _run_folder(args, task: str, seed: int, stop: str | None) -> str | None:
+  """A run's folder in a program: OUT/s<seed>, with --tasks OUT/<task>/s<seed>, with --early-stops
+  OUT/stop-<criterion>/ in front; None without --out."""
   if not args.out:
     return None
-  return seed_folder(args.out, seed, task if args.tasks else None)
+  return seed_folder(args.out, seed, task if args.tasks else None, stop if args.early_stops else None)
 
 
 def _train_group(plans: list[RunPlan], args) -> int:
   """The runs of --seeds in one program (train.core.group): each run's records as a run's own."""
-  from train.core.group import prepare_group, run_tag, train_group  # noqa: PLC0415
+  from train.core.group import prepare_group, run_tags, train_group  # noqa: PLC0415
   from train.core.interrupts import StopRequest  # noqa: PLC0415
   from train.core.session import SessionOptions, device_summary  # noqa: PLC0415
   p = plans[0]
@@ -193,9 +214,8 @@ def _train_group(plans: list[RunPlan], args) -> int:
         if i not in ended:  # the program failed before this run ended
           db.finish(q.run_id, "crashed", {}, None, _detail("crashed", stop, q))
     statuses = [ended[i] for i in range(len(plans))]
-  several = several_tasks(plans)
-  for q, final in zip(plans, finals):
-    print(f"{run_tag(q, several)}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
+  for q, final, tag in zip(plans, finals, run_tags(plans)):
+    print(f"{tag}: {final['step']:,} steps, {STATUS[final['reason']]} -> {q.out_dir}", flush=True)
   if "interrupted" in statuses:
     print("interrupted: checkpoints and policies saved; continue each run alone with:\n"
           + "\n".join(f"  python -m train.run --resume {q.out_dir}" for q in plans), file=sys.stderr, flush=True)
@@ -298,8 +318,9 @@ def main(argv: list[str] | None = None) -> int:
     jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
   try:
     try:
-      if args.tasks is not None and args.seeds is None:
-        raise RunError("--tasks needs --seeds (e.g. --seeds 0)")
+      for flag, given in (("--tasks", args.tasks), ("--early-stops", args.early_stops)):
+        if given is not None and args.seeds is None:
+          raise RunError(f"{flag} needs --seeds (e.g. --seeds 0)")
       plans = group_plans(args) if args.seeds is not None else [plan_run(args)]
     except (RunError, ConfigError) as e:
       print(f"error: {e}", file=sys.stderr)

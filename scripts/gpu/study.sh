@@ -70,8 +70,8 @@ if running; then echo "the study is running (pid $(cat "$pidfile")); waiting ${W
 end=$((SECONDS + ${WAIT:-560}))
 while [ $SECONDS -lt $end ] && running; do
   sleep 30; pack; grep "\[study\]" "$log" | tail -1
-  for f in /tmp/study-pack-*/train.log; do  # a pack: one log for its runs, each line tagged s<seed>
-    [ -f "$f" ] && grep -a "\[probe\]" "$f" | awk '{last[$1] = $0} END {for (s in last) print last[s]}'
+  for f in /tmp/study-pack-*/train.log; do  # a pack: one log for its runs, each line tagged [<stop>] [<task>] s<seed>
+    [ -f "$f" ] && grep -a "\[probe\]" "$f" | awk '{k = $0; sub(/ \[probe\].*/, "", k); last[k] = $0} END {for (s in last) print last[s]}'
   done
 done
 tail -5 "$log"

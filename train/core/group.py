@@ -26,12 +26,12 @@ from train.core.group_loop import GroupLoop, Member
 from train.core.plan import RunError, RunPlan
 from train.core.probe import GroupProbe
 from train.core.progress import Reporter
-from train.core.run_record import several_tasks
+from train.core.run_record import several_stops, several_tasks
 from train.core.session import SessionOptions, checkpointer_of, evaluator_of, finish_run, schedule_of
 
 
 class Prefixed:
-  """A text stream that starts each line with a run's tag (run_tag), for one shared terminal."""
+  """A text stream that starts each line with a run's tag (run_tags), for one shared terminal."""
 
   def __init__(self, tag: str, stream=None):
     self.tag, self.stream, self.fresh = tag, stream, True
@@ -59,7 +59,7 @@ def build_group(plans: list[RunPlan]) -> Training:
                      f"differ in {', '.join(packed_keys(base.cfg))} only")
     if dataclasses.replace(p, seed=base.seed, out_dir=base.out_dir, run_id=base.run_id, task=base.task,
                            cfg=base.cfg, early_stop=base.early_stop, overrides=base.overrides) != base:
-      raise RunError("--seeds: the runs of one program may differ in their seed and task only")
+      raise RunError("--seeds: the runs of one program may differ in their seed, task and early stop only")
   t = build(base)
   if t.mesh.devices.size != 1:
     raise RunError(f"--seeds trains on one device; this process sees {t.mesh.devices.size} "
@@ -127,16 +127,21 @@ def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = Non
   return compiled if tasks is None else (lambda states: compiled(states, tasks))
 
 
-def run_tag(plan: RunPlan, several: bool) -> str:
-  """How a program's output names one of its runs: s<seed>, or <task> s<seed> in a program of several tasks."""
-  return f"{plan.task} s{plan.seed}" if several else f"s{plan.seed}"
+def run_tags(plans: list[RunPlan]) -> list[str]:
+  """How a program's output names each of its runs: s<seed>, with <task> in front in a program of
+  several tasks, and the run's early stop (e.g. return=0.5, none) in front of that in a program of
+  several early stops."""
+  stops = [str(p.early_stop) if p.early_stop else "none" for p in plans]
+  tasks, criteria = several_tasks(plans), several_stops(stops)
+  return [" ".join([*([stop] if criteria else []), *([p.task] if tasks else []), f"s{p.seed}"])
+          for p, stop in zip(plans, stops)]
 
 
 def _member(t: Training, plan: RunPlan, db, shared: tuple, options: SessionOptions,
             on_end: Callable[[dict], None], tag: str) -> tuple[Member, Reporter]:
   """Run `plan`'s records, schedule and finish in the program; shared: (evaluate, probe) of this run;
   on_end(summary): told as soon as the run has ended, checkpointed and exported; tag: its name in
-  the program's output (run_tag)."""
+  the program's output (run_tags)."""
   ti = dataclasses.replace(t, plan=plan)
   checkpointer = checkpointer_of(ti, db, options)
   reporter = Reporter(plan.total_steps, 0, db, plan.run_id, f"{plan.out_dir}/tb", stream=Prefixed(tag + " "))
@@ -185,9 +190,8 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   update = compile_group(t, len(plans), tasks=tasks)
   evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
-  several = several_tasks(plans)
   parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
-                   lambda summary, i=i: on_end(i, summary), run_tag(p, several)) for i, p in enumerate(plans)]
+                   lambda summary, i=i: on_end(i, summary), tag) for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]
   shared = [s for s in (evaluate, probe) if s is not None]
 
   def after_update(states, step: int) -> None:

@@ -37,9 +37,13 @@ def read_run_record(run_dir: str, required: tuple[str, ...] = REQUIRED) -> dict:
   return meta
 
 
-def seed_folder(out: str, seed: int, task: str | None = None) -> str:
+def seed_folder(out: str, seed: int, task: str | None = None, early_stop: str | None = None) -> str:
   """The folder of seed `seed`'s run among the runs of one program (train.run --seeds S,... --out
-  OUT): OUT/s<seed>; in a program of several tasks (--tasks; task given) OUT/<task>/s<seed>."""
+  OUT): OUT/s<seed>; in a program of several tasks (--tasks; task given) OUT/<task>/s<seed>; in a
+  program of several early stops (--early-stops; early_stop given: the criterion as written)
+  OUT/stop-<criterion>/... in front of either."""
+  if early_stop is not None:
+    out = os.path.join(out, f"stop-{early_stop}")
   return os.path.join(out, f"s{seed}") if task is None else os.path.join(out, task, f"s{seed}")
 
 
@@ -47,6 +51,13 @@ def several_tasks(runs) -> bool:
   """Whether the runs of one program (anything with a `task`: plans, a study's cells) are of several
   tasks: then each run's folder is OUT/<task>/s<seed> (seed_folder) and train.run takes --tasks."""
   return len({r.task for r in runs}) > 1
+
+
+def several_stops(stops) -> bool:
+  """Whether the runs of one program stop at several criteria (each run's early stop as written, e.g.
+  "return", "none"): then each run's folder is OUT/stop-<criterion>/... (seed_folder) and train.run
+  takes --early-stops."""
+  return len(set(stops)) > 1
 
 
 def run_id_in(run_dir: str) -> str | None:

@@ -14,7 +14,7 @@ from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, M
 from train.core.early_stop import NO_EARLY_STOP, parse_early_stop
 from train.evaluation import EVAL_TRIALS, robustness_scenes, scene_config
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
-from train.core.run_record import seed_folder, several_tasks
+from train.core.run_record import seed_folder, several_stops, several_tasks
 from train.core.presets import SB3, get_preset, with_hyperparams
 
 STUDY_DEFAULTS = {"retries": 1, "eval_trials": EVAL_TRIALS, "compare": [], "baselines": list(BASELINES),
@@ -102,7 +102,7 @@ class Cell:
       args += ["--library", self.library]
     if self.milestones:
       args += ["--milestones", ",".join(map(str, self.milestones))]
-    return args + ["--early-stop", self.early_stop or NO_EARLY_STOP]  # the group's, not the preset's
+    return args + ["--early-stop", stop_of(self)]  # the group's, not the preset's
 
   def config(self):
     """The run's task config (run_config)."""
@@ -244,19 +244,27 @@ def packs_of(fresh: list[Cell]) -> list[list[Cell]]:
   """The packs among cells with nothing trained yet (two or more cells each, in order): those of a
   pack_seeds group that differ only in their seed; of a pack_tasks group, those packs joined across
   the group's tasks where they have the same seeds and one program takes their configs' differences
-  as data (mjx_tracks.envs.task_data; train.run --tasks), task after task."""
+  as data (mjx_tracks.envs.task_data; train.run --tasks), task after task; then the packs of groups
+  that differ only in their early stop (and name), with the same tasks and seeds, joined group after
+  group (train.run --early-stops: the early stop is the host's, not the program's)."""
   packs: dict[Cell, list[Cell]] = {}
   for c in fresh:
     if c.pack_seeds and not c.is_baseline:
       packs.setdefault(c.pack_key, []).append(c)
+  by_group = _joined(list(packs.values()), lambda q, p: p[0].pack_tasks and _joins(q, p))
+  return [p for p in _joined(by_group, _same_but_stop) if len(p) > 1]
+
+
+def _joined(packs: list[list[Cell]], joins) -> list[list[Cell]]:
+  """The packs, each joined into the first earlier one that joins(earlier, it) allows."""
   joined: list[list[Cell]] = []
-  for p in packs.values():
-    home = next((q for q in joined if p[0].pack_tasks and _joins(q, p)), None)
+  for p in packs:
+    home = next((q for q in joined if joins(q, p)), None)
     if home is None:
       joined.append(list(p))
     else:
       home.extend(p)
-  return [p for p in joined if len(p) > 1]
+  return joined
 
 
 def _joins(pack: list[Cell], seeds: list[Cell]) -> bool:
@@ -268,20 +276,37 @@ def _joins(pack: list[Cell], seeds: list[Cell]) -> bool:
           and packing_conflict(a.config(), b.config()) is None)
 
 
+def stop_of(cell: Cell) -> str:
+  """A cell's early stop as train.run takes it (none for a group without one)."""
+  return cell.early_stop or NO_EARLY_STOP
+
+
+def _same_but_stop(pack: list[Cell], group: list[Cell]) -> bool:
+  """Whether one group's pack may join a pack of other groups: the same runs (tasks, seeds, in order)
+  under another early stop, everything else the same."""
+  a, b = pack[0], group[0]
+  first = [(c.task, c.seed) for c in pack if c.group == a.group]
+  same = dataclasses.replace(a.pack_key, group="", early_stop="") == dataclasses.replace(b.pack_key, group="", early_stop="")
+  return (same and first == [(c.task, c.seed) for c in group] and stop_of(b) not in {stop_of(c) for c in pack})
+
+
 def pack_train_args(pack: list[Cell]) -> list[str]:
   """`python -m train.run` arguments of a pack (packs_of), less its folder and database: its first
-  cell's, with --seeds S,S,... for --seed (and --tasks T,T,... for --task where it spans several tasks)."""
+  cell's, with --seeds S,S,... for --seed (and --tasks T,T,... for --task where it spans several tasks,
+  --early-stops C,C,... for --early-stop where it spans several early stops)."""
   def swapped(args: list[str], flag: str, plural: str, values) -> list[str]:
     i = args.index(flag)
     return [*args[:i], plural, ",".join(map(str, dict.fromkeys(values))), *args[i + 2:]]
   args = swapped(pack[0].train_args(), "--seed", "--seeds", (c.seed for c in pack))
-  return swapped(args, "--task", "--tasks", (c.task for c in pack)) if several_tasks(pack) else args
+  args = swapped(args, "--task", "--tasks", (c.task for c in pack)) if several_tasks(pack) else args
+  stops = [stop_of(c) for c in pack]
+  return swapped(args, "--early-stop", "--early-stops", stops) if several_stops(stops) else args
 
 
 def pack_folders(pack: list[Cell]) -> list[str]:
   """Each cell's run folder in its pack's output folder (train.core.run_record.seed_folder)."""
-  several = several_tasks(pack)
-  return [seed_folder("", c.seed, c.task if several else None) for c in pack]
+  tasks, stops = several_tasks(pack), several_stops([stop_of(c) for c in pack])
+  return [seed_folder("", c.seed, c.task if tasks else None, stop_of(c) if stops else None) for c in pack]
 
 
 def cells(spec: StudySpec) -> list[Cell]:
