@@ -340,9 +340,11 @@ def test_packs_join_across_groups_only_where_they_differ_in_their_early_stop_alo
   assert args[args.index("--early-stops") + 1] == "none,return" and "--early-stop" not in args
   assert pack_folders(pack)[:2] == ["stop-none/asc-inc-cog/s0", "stop-none/asc-inc-cog/s1"]
   assert pack_folders(pack)[-1] == "stop-return/asc-uni-cog/s1"
-  for other in ({"early_stop": "", "name": "same"}, {"set": ["reward.cog_scale=0.5"]}, {"steps": [300]},
-                {"tasks": ["asc-inc-cog"]}, {"pack_tasks": False}):
-    found = packs(group, {**two[1], **other})
+  for first, other in (({}, {"early_stop": "", "name": "same"}), ({}, {"set": ["reward.cog_scale=0.5"]}),
+                       ({}, {"steps": [300]}), ({}, {"tasks": ["asc-inc-cog"]}), ({}, {"pack_tasks": False}),
+                       ({}, {"early_stop": "success"}),  # probes its runs, where this preset probes none
+                       ({"early_stop": "return"}, {"early_stop": "return=0.5"})):  # one criterion on both tasks
+    found = packs({**group, **first}, {**two[1], **other})
     assert len(found) >= 2 and all(len({cid.split("/")[0] for cid in p}) == 1 for p in found), other
   partial = [c for c in cells(study_from_dict({**study, "groups": list(two)})) if c.id != "r/asc-uni-cog/200/s1"]
   assert [len(p) for p in packs_of(partial)] == [4, 2]  # r's seeds differ on asc-uni-cog: its own packs

@@ -181,7 +181,8 @@ def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):
     (["--task", ASC, "--early-stops", "return,none"], "--early-stops needs --seeds"),
     (["--task", ASC, "--seeds", "0", "--early-stops", "return,return"], "--early-stops takes different criteria"),
     (["--task", ASC, "--seeds", "0", "--early-stops", "return,none", "--early-stop", "none"], "instead of --early-stop"),
-    (["--task", ASC, "--seeds", "0", "--early-stops", "return,sometime"], "sometime")])
+    (["--task", ASC, "--seeds", "0", "--early-stops", "return,sometime"], "sometime"),
+    (["--task", ASC, "--seeds", "0", "--early-stops", "return,return=0.5"], "two of them are one criterion")])
 def test_tasks_one_program_cannot_hold_are_refused_in_one_line_before_anything_is_written(argv, words, tmp_path, capsys):
   assert run.main([*argv, *SAC_TINY, "--steps", "64", "--out", str(tmp_path / "g")]) == 2
   err = capsys.readouterr().err

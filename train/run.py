@@ -30,7 +30,7 @@ import sys
 from mjx_tracks.envs.config import ConfigError
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
-from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES
+from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, criterion_name
 from train.core.presets import SB3
 from train.core.run_record import seed_folder
 from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, RESUMABLE, RunError, RunPlan, new_run_id, plan_run, write_run_json  # noqa: F401  (new_run_id: API)
@@ -150,10 +150,15 @@ def group_plans(args) -> list[RunPlan]:
   if len(set(seeds)) != len(seeds) or len(seeds) * len(tasks) * len(stops) < 2:
     raise RunError(f"--seeds needs at least two different seeds (or --tasks two tasks, or --early-stops two "
                    f"criteria); got {args.seeds!r}")
-  return [plan_run(argparse.Namespace(**{**vars(args), "task": task, "tasks": None, "seed": s, "seeds": None,
-                                         "early_stop": stop, "early_stops": None,
-                                         "out": _run_folder(args, task, s, stop)}))
-          for stop in stops for task in tasks for s in seeds]
+  plans = [plan_run(argparse.Namespace(**{**vars(args), "task": task, "tasks": None, "seed": s, "seeds": None,
+                                          "early_stop": stop, "early_stops": None,
+                                          "out": _run_folder(args, task, s, stop)}))
+           for stop in stops for task in tasks for s in seeds]
+  for task in tasks:  # runs of two spellings of one criterion would share their tags and results
+    named = [criterion_name(p.early_stop) for p in plans if p.task == task and p.seed == seeds[0]]
+    if len(set(named)) < len(named):
+      raise RunError(f"--early-stops {args.early_stops}: on {task} two of them are one criterion ({', '.join(named)})")
+  return plans
 
 
 def _tasks(args) -> list[str]:
@@ -171,7 +176,7 @@ def _early_stops(args) -> list[str | None]:
   or --early-stop's (None: the preset's)."""
   if args.early_stops is None:
     return [args.early_stop]
-  stops = [x.strip() for x in args.early_stops.split(",")]
+  stops = args.early_stops.split(",")  # as written: each names its runs' folder
   if args.early_stop is not None or not all(stops) or len(set(stops)) != len(stops):
     raise RunError(f"--early-stops takes different criteria separated by commas, instead of --early-stop; "
                    f"got {args.early_stops!r}")

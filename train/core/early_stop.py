@@ -55,6 +55,12 @@ def _times(text: str, metric: str, value: str) -> tuple[str, int]:
   return value, int(times)
 
 
+def criterion_name(early: EarlyStop | None) -> str:
+  """How a run's early stop is named where one must be (a program's run tags): the criterion, or
+  NO_EARLY_STOP for a run without one."""
+  return str(early) if early else NO_EARLY_STOP
+
+
 def parse_early_stop(text: str, cfg) -> EarlyStop:
   """'return', 'return=0.5', 'success', 'success=0.97', 'success=0.97x3' -> EarlyStop; ValueError
   naming the fault."""

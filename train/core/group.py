@@ -21,6 +21,7 @@ import jax.numpy as jnp
 
 from mjx_tracks.envs.task_data import TaskData, packed_keys, packing_conflict, stacked, task_data
 from train.core.build import Training, build, has_evaluations, learner_on
+from train.core.early_stop import criterion_name
 from train.core.group_evaluator import GroupEvaluator, evaluations_shared
 from train.core.group_loop import GroupLoop, Member
 from train.core.plan import RunError, RunPlan
@@ -59,7 +60,8 @@ def build_group(plans: list[RunPlan]) -> Training:
                      f"differ in {', '.join(packed_keys(base.cfg))} only")
     if dataclasses.replace(p, seed=base.seed, out_dir=base.out_dir, run_id=base.run_id, task=base.task,
                            cfg=base.cfg, early_stop=base.early_stop, overrides=base.overrides) != base:
-      raise RunError("--seeds: the runs of one program may differ in their seed, task and early stop only")
+      raise RunError("--seeds: the runs of one program may differ in their seed, task and early stop only "
+                     "(an early stop on success probes every run: with a preset that probes none, keep it apart)")
   t = build(base)
   if t.mesh.devices.size != 1:
     raise RunError(f"--seeds trains on one device; this process sees {t.mesh.devices.size} "
@@ -131,7 +133,7 @@ def run_tags(plans: list[RunPlan]) -> list[str]:
   """How a program's output names each of its runs: s<seed>, with <task> in front in a program of
   several tasks, and the run's early stop (e.g. return=0.5, none) in front of that in a program of
   several early stops."""
-  stops = [str(p.early_stop) if p.early_stop else "none" for p in plans]
+  stops = [criterion_name(p.early_stop) for p in plans]
   tasks, criteria = several_tasks(plans), several_stops(stops)
   return [" ".join([*([stop] if criteria else []), *([p.task] if tasks else []), f"s{p.seed}"])
           for p, stop in zip(plans, stops)]

@@ -178,8 +178,8 @@ class StudyRunner:
     return future
 
   def _submit_pack(self, cids: list[str]):
-    """Fresh cells that differ only in their seed (and task: packs_of), trained as one program
-    (train.run --seeds [--tasks])."""
+    """Fresh cells that differ only in their seed (and task, early stop: packs_of), trained as one
+    program (train.run --seeds [--tasks] [--early-stops])."""
     cells = [self.cells[cid] for cid in cids]
     for cid in cids:  # a folder here is what a cut-off attempt left (no checkpoint): the pack replaces it
       shutil.rmtree(cell_folder(self.folder, self.cells[cid]), ignore_errors=True)

@@ -101,8 +101,8 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
 
 def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
              commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
-  """First attempts of cells that differ only in their seed (and task: train.study.spec.packs_of),
-  as one program (`train.run --seeds [--tasks]`); members: each run's folder in the program's output
+  """First attempts of cells that differ only in their seed (and task, early stop:
+  train.study.spec.packs_of), as one program (`train.run --seeds [--tasks] [--early-stops]`); members: each run's folder in the program's output
   (train.study.spec.pack_folders); then the evaluation of each run that ended (its total steps or
   its early stop; also where the program failed later, e.g. by another run), side by side.
   {"cells": {member: run_cell's result}}: each run's folder comes back with its own records
