@@ -13,6 +13,7 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+import time
 
 from mjx_tracks import atomic
 from train.core.run_record import run_id_in
@@ -104,7 +105,8 @@ def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
   """First attempts of cells that differ only in their seed (and task, early stop:
   train.study.spec.packs_of), as one program (`train.run --seeds [--tasks] [--early-stops]`); members: each run's folder in the program's output
   (train.study.spec.pack_folders); then the evaluation of each run that ended (its total steps or
-  its early stop; also where the program failed later, e.g. by another run), side by side.
+  its early stop; also where the program failed later, e.g. by another run), side by side (at
+  most evaluations_at_once at a time).
   {"cells": {member: run_cell's result}}: each run's folder comes back with its own records
   (run.sqlite) and the pack's training output."""
   scratch = tempfile.mkdtemp(prefix="study-pack-")
@@ -138,21 +140,43 @@ def _ended(folder: str, db: str) -> bool:
     return False
 
 
+def evaluations_at_once() -> int:
+  """How many of a pack's evaluation processes run at once: one per CPU core this process may use
+  (each compiles its programs on the CPU first; a pack of 40 one-robot runs would otherwise start 40
+  JAX processes together)."""
+  return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+
+
 def _evaluate_side_by_side(folders: dict[str, str], eval_args: list[str], command: tuple[str, ...],
-                           scratch: str) -> dict[str, tuple[str, int, str]]:
-  """Evaluates the run folders at once (one process each; on a GPU none preallocates memory);
-  {member: ("evaluate", exit code, output)}. Any started process is waited for, whatever happens."""
+                           scratch: str, at_once: int | None = None) -> dict[str, tuple[str, int, str]]:
+  """Evaluates the run folders, at most `at_once` (evaluations_at_once) processes at a time, one
+  each (on a GPU none preallocates memory); {member: ("evaluate", exit code, output)}. Any started
+  process is waited for, whatever happens."""
   env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}
-  procs, done = {}, {}
+  waiting, running, done = list(folders.items()), {}, {}
   try:
-    for m, folder in folders.items():
-      with open(os.path.join(scratch, f"evaluate-{m.replace(os.sep, '-')}.log"), "w") as log:
-        argv = _evaluate_argv(command, folder, eval_args, os.path.join(folder, RUN_DB))
-        procs[m] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
+    while waiting or running:
+      while waiting and len(running) < (at_once or evaluations_at_once()):
+        m, folder = waiting.pop(0)
+        with open(os.path.join(scratch, f"evaluate-{m.replace(os.sep, '-')}.log"), "w") as log:
+          argv = _evaluate_argv(command, folder, eval_args, os.path.join(folder, RUN_DB))
+          running[m] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
+      m = _first_ended(running)
+      proc, name = running.pop(m)
+      done[m] = ("evaluate", proc.returncode, open(name).read())
   finally:
-    for m, (proc, name) in procs.items():
+    for m, (proc, name) in running.items():
       done[m] = ("evaluate", proc.wait(), open(name).read())
   return done
+
+
+def _first_ended(running: dict) -> str:
+  """The member whose process (running[member][0]) ends first, once it has."""
+  while True:
+    for m, (proc, _) in running.items():
+      if proc.poll() is not None:
+        return m
+    time.sleep(0.1)
 
 
 def _outcome(folder: str, rc: int, phase: str, output: str) -> dict:
