@@ -190,7 +190,7 @@ def plan_run(args: argparse.Namespace) -> RunPlan:
   if library != DEFAULT_LIBRARY:
     early, probe_every, milestones = _library_limits(library, args, early)
   else:
-    probe_every = _probe_every(args.probe_every, early, preset, cfg)
+    probe_every = probe_every_of(args.probe_every, early, preset, cfg)
     milestones = parse_milestones(getattr(args, "milestones", None), steps)
   return RunPlan(run_id, out_dir, args.task, algo, preset_name, preset, seed, tuple(args.set),
                  cfg, steps, num_envs, False, early, probe_every, milestones=milestones, hp=tuple(args.hp),
@@ -246,7 +246,7 @@ def probe_interval(preset_steps: int, cfg: TaskConfig) -> int:
   return preset_steps * max(1, -(-cfg.episode.max_steps // default_config().episode.max_steps))
 
 
-def _probe_every(given: int | None, early: EarlyStop | None, preset, cfg) -> int:
+def probe_every_of(given: int | None, early: EarlyStop | None, preset, cfg) -> int:
   """Steps between probes of the task's probe scene (SceneKind.probe_scene): as given, else the preset's
   (tasks with a probe scene; probe_interval); an early stop on success needs them."""
   if given is not None and given < 0:

@@ -13,7 +13,7 @@ from mjx_tracks.envs.config import (ConfigError, apply_override, available_tasks
 from mjx_tracks.limits import MAX_OVERRIDES, MAX_RETRIES, MAX_SEED, MAX_STEPS, MAX_STUDY_RUNS, MAX_TRIALS
 from train.core.early_stop import NO_EARLY_STOP, criterion_name, parse_early_stop
 from train.evaluation import EVAL_TRIALS, robustness_scenes, scene_config
-from train.core.plan import DEFAULT_LIBRARY, LIBRARIES
+from train.core.plan import DEFAULT_LIBRARY, LIBRARIES, probe_every_of
 from train.core.run_record import seed_folder, several_stops, several_tasks
 from train.core.presets import SB3, get_preset, with_hyperparams
 
@@ -290,22 +290,24 @@ def _same_but_stop(pack: list[Cell], group: list[Cell]) -> bool:
   return same and first == [(c.task, c.seed) for c in group] and _stops_apart(pack, group)
 
 
-def _criterion(cell: Cell):
-  """A cell's early stop as its run will hold it (train.core.early_stop.EarlyStop), or None."""
-  return None if stop_of(cell) == NO_EARLY_STOP else parse_early_stop(stop_of(cell), cell.config())
+def _stopping(cell: Cell) -> tuple[str, int]:
+  """(its criterion's name, its probe interval) as the cell's run will hold them (train.run's plan)."""
+  cfg = cell.config()
+  early = None if stop_of(cell) == NO_EARLY_STOP else parse_early_stop(stop_of(cell), cfg)
+  preset = with_hyperparams(get_preset(cell.algo, cell.preset, cell.library), cell.hp)
+  return criterion_name(early), probe_every_of(None, early, preset, cfg)
 
 
 def _stops_apart(pack: list[Cell], group: list[Cell]) -> bool:
   """Whether a group's early stop is another criterion than each of a pack's on every task (two
-  spellings of one criterion would give two runs one tag), and its runs probe as the pack's do (an
-  early stop on success probes its runs where the preset would not: the program refuses that)."""
-  mine = {c.task: _criterion(c) for c in group if c.seed == group[0].seed}
-  preset_probes = with_hyperparams(get_preset(group[0].algo, group[0].preset, group[0].library), group[0].hp).probe_steps > 0
+  spellings of one criterion would give two runs one tag), with the probe interval of the pack's
+  runs (an early stop on success probes its runs where the preset would not: one program holds
+  runs of one interval)."""
+  mine = {c.task: _stopping(c) for c in group if c.seed == group[0].seed}
 
-  def apart(theirs, own) -> bool:
-    probes_alike = preset_probes or bool(theirs and theirs.needs_probe) == bool(own and own.needs_probe)
-    return criterion_name(theirs) != criterion_name(own) and probes_alike
-  return all(apart(_criterion(c), mine[c.task]) for c in pack if c.seed == pack[0].seed)
+  def apart(theirs: tuple[str, int], own: tuple[str, int]) -> bool:
+    return theirs[0] != own[0] and theirs[1] == own[1]
+  return all(apart(_stopping(c), mine[c.task]) for c in pack if c.seed == pack[0].seed)
 
 
 def pack_train_args(pack: list[Cell]) -> list[str]:

@@ -103,8 +103,8 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
 def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
              commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
   """First attempts of cells that differ only in their seed (and task, early stop:
-  train.study.spec.packs_of), as one program (`train.run --seeds [--tasks] [--early-stops]`); members: each run's folder in the program's output
-  (train.study.spec.pack_folders); then the evaluation of each run that ended (its total steps or
+  train.study.spec.packs_of), as one program (`train.run --seeds [--tasks] [--early-stops]`);
+  members: each run's folder in the program's output (train.study.spec.pack_folders); then the evaluation of each run that ended (its total steps or
   its early stop; also where the program failed later, e.g. by another run), side by side (at
   most evaluations_at_once at a time).
   {"cells": {member: run_cell's result}}: each run's folder comes back with its own records
@@ -144,7 +144,7 @@ def evaluations_at_once() -> int:
   """How many of a pack's evaluation processes run at once: one per CPU core this process may use
   (each compiles its programs on the CPU first; a pack of 40 one-robot runs would otherwise start 40
   JAX processes together)."""
-  return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+  return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def _evaluate_side_by_side(folders: dict[str, str], eval_args: list[str], command: tuple[str, ...],
@@ -153,10 +153,11 @@ def _evaluate_side_by_side(folders: dict[str, str], eval_args: list[str], comman
   each (on a GPU none preallocates memory); {member: ("evaluate", exit code, output)}. Any started
   process is waited for, whatever happens."""
   env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}
+  at_once = at_once or evaluations_at_once()
   waiting, running, done = list(folders.items()), {}, {}
   try:
     while waiting or running:
-      while waiting and len(running) < (at_once or evaluations_at_once()):
+      while waiting and len(running) < at_once:
         m, folder = waiting.pop(0)
         with open(os.path.join(scratch, f"evaluate-{m.replace(os.sep, '-')}.log"), "w") as log:
           argv = _evaluate_argv(command, folder, eval_args, os.path.join(folder, RUN_DB))
