@@ -76,6 +76,7 @@ def contact_damping(m: mjx.Model, solref: jax.Array, solimp: jax.Array, pos: jax
   return b
 
 
+@jax.jit
 def kinematics(m: mjx.Model, d: mjx.Data) -> mjx.Data:
   """Body / geom / site poses and centres of mass consistent with qpos."""
   return smooth.com_pos(m, smooth.kinematics(m, d))

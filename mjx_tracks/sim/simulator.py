@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -21,6 +22,7 @@ from mjx_tracks.sim.tracks import TrackModel, apply_belt_contacts, aref_shift
 SPAWN_CLEARANCE = 0.005  # m, the chassis spawns this far above resting height, then settles
 
 
+@functools.partial(jax.jit, static_argnums=2)
 def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array,
                      mu_scale: jax.Array | None = None) -> mjx.Data:
   """One physics substep: mjx.step with the belt contacts of the track model (its belt friction

@@ -54,6 +54,16 @@ class TrackModel:
   steering_efficiency: float
   contact_row0: int  # first efc row of the contacts (all contacts condim 3, 4 rows each)
 
+  def _key(self) -> tuple:
+    return tuple((v.tobytes(), v.dtype.str, v.shape) if isinstance(v, np.ndarray) else v
+                 for v in dataclasses.astuple(self))
+
+  def __hash__(self) -> int:  # by value: a static argument of the jitted substep (simulator.py)
+    return hash(self._key())
+
+  def __eq__(self, other) -> bool:
+    return isinstance(other, TrackModel) and self._key() == other._key()
+
   @staticmethod
   def create(m: mujoco.MjModel, layout: Layout, mu_along: float, mu_across: float,
              track_separation: float, steering_efficiency: float) -> "TrackModel":
