@@ -78,5 +78,6 @@ def contact_damping(m: mjx.Model, solref: jax.Array, solimp: jax.Array, pos: jax
 
 @jax.jit
 def kinematics(m: mjx.Model, d: mjx.Data) -> mjx.Data:
-  """Body / geom / site poses and centres of mass consistent with qpos."""
+  """Body / geom / site poses and centres of mass consistent with qpos (jitted: traced once per
+  model and process, as simulator.step_with_tracks)."""
   return smooth.com_pos(m, smooth.kinematics(m, d))

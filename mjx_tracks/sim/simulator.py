@@ -22,6 +22,9 @@ from mjx_tracks.sim.tracks import TrackModel, apply_belt_contacts, aref_shift
 SPAWN_CLEARANCE = 0.005  # m, the chassis spawns this far above resting height, then settles
 
 
+# jitted at module level, tm static (hashed by value): a process traces each model's substep once and
+# every later program of that model reuses it (a tenth of the trace; XLA inlines the call, so the
+# compiled program is the same); tests/test_trace_cache.py
 @functools.partial(jax.jit, static_argnums=2)
 def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array,
                      mu_scale: jax.Array | None = None) -> mjx.Data:
