@@ -88,15 +88,19 @@ def trace_summary(folder: pathlib.Path, control_steps: int, wall_s: float) -> di
   names = {e["pid"]: e["args"].get("name", "") for e in events if e.get("ph") == "M" and e.get("name") == "process_name"}
   device = {pid for pid, name in names.items() if "/device:" in name and "CPU" not in name.split("/device:")[-1]}
   on_device = [e for e in events if e.get("ph") == "X" and e.get("pid") in device]
-  by_name = collections.Counter()
+  by_name, calls = collections.Counter(), collections.Counter()
   for e in on_device:
     by_name[e["name"]] += float(e.get("dur", 0))
-  copies = [e for e in on_device if "memcpy" in e["name"].lower() and "dtoh" in e["name"].lower().replace(" ", "")]
+    calls[e["name"]] += 1
+  copies = [e for e in on_device if "memcpy" in e["name"].lower() and any(
+      w in e["name"].lower().replace(" ", "") for w in ("dtoh", "d2h"))]
   busy_us = sum(float(e.get("dur", 0)) for e in on_device)
   return {"device_processes": sorted(names[p] for p in device), "events_on_device": len(on_device),
           "per_control_step": {"events": len(on_device) / control_steps, "device_to_host_copies": len(copies) / control_steps,
                                "device_busy_ms": busy_us / 1e3 / control_steps, "wall_ms": wall_s * 1e3 / control_steps},
-          "top_kernels_ms_per_control_step": {k: round(v / 1e3 / control_steps, 4) for k, v in by_name.most_common(15)}}
+          "top_kernels_per_control_step": {k: {"ms": round(v / 1e3 / control_steps, 4), "calls": calls[k] / control_steps,
+                                                   "us_per_call": round(v / calls[k], 2)}
+                                               for k, v in by_name.most_common(15)}}
 
 
 def measure(argv: list[str], n: int, updates: int, out: pathlib.Path) -> dict:
