@@ -3,7 +3,7 @@ training step's seconds per control step, the same for the environments' steps a
 no learning: the physics and the env's bookkeeping), and a profile of one training step on the
 device: how many kernels it launches per control step, how long the device is busy against the
 wall time, how many device-to-host copies (each while-loop iteration's predicate on a GPU), and
-the kernels that take the most time. Writes OUT/profile-group.json with the device, command and date.
+the kernels that take the most time; and the same for the program's Brax evaluation. Writes OUT/profile-group.json with the device, command and date.
 
 Usage (GPU host): python scripts/gpu/profile_group.py OUT [--runs 1,20,40] [--updates 4] -- TRAIN.RUN ARGS
 E.g. the paper study's SAC program: -- --tasks asc-inc-cog,asc-uni-cog,des-inc-ang,des-uni-ang --algo sac
@@ -26,7 +26,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspa
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
-from train.core.group import build_group, group_tasks, init_group, lower_group  # noqa: E402
+from train.core.group import build_group, group_evaluations, group_tasks, init_group, lower_group  # noqa: E402
 from train.run import group_plans, parser  # noqa: E402
 from train.run import plan_run  # noqa: E402
 
@@ -123,7 +123,30 @@ def measure(argv: list[str], n: int, updates: int, out: pathlib.Path) -> dict:
   return {"runs": n, "robots_per_run": robots_of(t), "compile_s": round(compile_s, 1),
           "control_steps_per_update": steps, "training_ms_per_control_step": round(per_update * 1e3 / steps, 3),
           "env_only_ms_per_control_step": round(env_per_call * 1e3 / steps, 3),
-          "traced_update": trace_summary(folder, steps, traced_s)}
+          "traced_update": trace_summary(folder, steps, traced_s), **evaluation(t, plans, tasks, states, out / f"trace-eval-{n}")}
+
+
+def evaluation(t, plans, tasks, states, folder: pathlib.Path) -> dict:
+  """The program's Brax evaluation (train.core.group.group_evaluations): its first call (with the
+  compilation), a second one timed, a third profiled; {} where the preset has none or the runs
+  are evaluated one by one."""
+  shared, _ = group_evaluations(t, plans, None if tasks is None else [p.cfg for p in plans])
+  if shared is None:
+    return {}
+  t0 = time.perf_counter()
+  shared.evaluate(states)
+  first = time.perf_counter() - t0
+  t0 = time.perf_counter()
+  shared.evaluate(states)
+  second = time.perf_counter() - t0
+  length = t.plan.cfg.episode.max_steps
+  with jax.profiler.trace(str(folder), create_perfetto_trace=True):
+    t0 = time.perf_counter()
+    shared.evaluate(states)
+    third = time.perf_counter() - t0
+  return {"evaluation": {"episodes_per_run": t.plan.preset.num_eval_envs, "control_steps": length,
+                         "first_s": round(first, 2), "second_s": round(second, 2),
+                         "traced": trace_summary(folder, length, third)}}
 
 
 def main() -> int:
