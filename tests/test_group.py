@@ -3,6 +3,7 @@ program's runs kept apart, the command end to end, and its benchmark (`train.ben
 
 import json
 import os
+import time
 import types
 
 import jax
@@ -52,6 +53,28 @@ def test_each_run_stops_on_its_own_probe_and_is_finished_with_the_state_it_had_t
   assert results == [("early_stop", 400, 4), ("done", 1_000, 10)] and finished == [0, 1]
   assert [r["step"] for r in reporters[0].rows if r["source"] == "probe"] == [200, 400]
   assert len([r for r in reporters[1].rows if r["source"] == "probe"]) == 5
+
+
+def test_a_programs_checkpoint_rounds_take_at_most_a_tenth_of_its_wall_time():
+  """A round is one transfer of the program's states to the host, then each run's checkpoint of
+  its own slice of them; a round of d seconds holds the next off for 9 d (round_gap) where that is
+  longer than --checkpoint-every (here 0: every update, were it not for the round's length)."""
+  saved = []
+
+  class SlowSaves(Checkpointer):
+    def save(self, state, step):
+      time.sleep(0.05)
+      saved.append((type(state), int(state), step))
+      self.last_t = time.monotonic()
+
+  members = [Member(SlowSaves(None, {}, None, lambda step: None, every_s=0.0), Rows(), Schedule(100), lambda r: r.step)
+             for _ in (0, 1)]
+  results = GroupLoop(lambda s: (s + 1, {}), 100, members, types.SimpleNamespace(requested=None)).run(
+      jnp.zeros(2, jnp.int32), 0, 300)
+  assert results == [300, 300]
+  assert [(value, step) for _, value, step in saved] == [(0, 0), (0, 0)]  # one round, at the start
+  assert all(issubclass(kind, np.generic) for kind, _, _ in saved)  # host slices, not device ones
+  assert all(0.9 <= m.checkpointer.gap_s < 10 for m in members)  # 9 x a round of ~0.1 s
 
 
 def test_a_stop_request_ends_every_run_of_the_program():

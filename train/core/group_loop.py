@@ -11,8 +11,10 @@ import time
 from typing import Any, Callable
 
 import jax
+import numpy as np
 
 from train.core.loop import Checkpointer, Clock, LoopResult, Schedule, Track, _agree
+from train.core.mesh import to_host
 
 
 @dataclasses.dataclass(frozen=True)
@@ -25,9 +27,28 @@ class Member:
   finish: Callable[[LoopResult], Any] = lambda result: result
 
 
-def run_slice(states, i: int):
-  """Run i's state of the stacked states (the program's leading axis)."""
+CHECKPOINT_SHARE = 0.1  # at most this share of a program's wall time goes to its timed checkpoint rounds
+
+
+@jax.jit
+def _device_slice(states, i):
   return jax.tree_util.tree_map(lambda x: x[i], states)
+
+
+def run_slice(states, i: int):
+  """Run i's state of the stacked states (the program's leading axis): on the device one program
+  for the whole tree (leaf by leaf, 40 one-robot SAC runs took 0.16 s a run on an H100), on the
+  host numpy views."""
+  if all(isinstance(x, np.ndarray) for x in jax.tree_util.tree_leaves(states)):
+    return jax.tree_util.tree_map(lambda x: x[i], states)
+  return _device_slice(states, i)
+
+
+def round_gap(round_s: float, share: float = CHECKPOINT_SHARE) -> float:
+  """Seconds to wait after a checkpoint round of round_s seconds so that rounds take at most
+  `share` of the wall time (a round of 40 one-robot SAC runs with their replay buffers took ~20 s
+  on an H100: at the default 60 s between rounds, a quarter of the program's time)."""
+  return round_s * (1.0 / share - 1.0)
 
 
 class AllRuns:
@@ -109,8 +130,7 @@ class GroupLoop:
           end(i, "interrupted")
         break
       if ckpt:
-        for i in active:
-          clock.paused(self.members[i].checkpointer.save, run_slice(states, i), step)
+        self._checkpoint_round(states, step, active, clock)
       states, metrics = self.update(states)
       step += self.spu
       self.after_update(states, step)
@@ -121,3 +141,14 @@ class GroupLoop:
       if i not in done:
         end(i, "done")
     return [done[i] for i in range(len(self.members))]
+
+  def _checkpoint_round(self, states, step: int, active: list[int], clock: Clock) -> None:
+    """Every active run's timed checkpoint, from one device-to-host transfer of the program's
+    states; the next round waits round_gap(this round's seconds), or --checkpoint-every if longer."""
+    t0 = time.monotonic()
+    host = clock.paused(to_host, states)
+    for i in active:
+      clock.paused(self.members[i].checkpointer.save, run_slice(host, i), step)
+    gap = round_gap(time.monotonic() - t0)
+    for i in active:
+      self.members[i].checkpointer.hold_off(gap)

@@ -27,9 +27,14 @@ class Checkpointer:
   every_s: float
   last_t: float = dataclasses.field(default_factory=time.monotonic)
   last_step: int | None = None
+  gap_s: float = 0.0  # s: the next timed checkpoint no sooner than this either (hold_off)
 
   def due(self) -> bool:
-    return time.monotonic() - self.last_t >= self.every_s
+    return time.monotonic() - self.last_t >= max(self.every_s, self.gap_s)
+
+  def hold_off(self, gap_s: float) -> None:
+    """The next timed checkpoint no sooner than gap_s after the last (nor than every_s)."""
+    self.gap_s = gap_s
 
   def save(self, state, step: int) -> None:
     """Checkpoints the state (unless this step is on disk already)."""
