@@ -37,8 +37,7 @@ def _device_slice(states, i):
 
 def run_slice(states, i: int):
   """Run i's state of the stacked states (the program's leading axis): on the device one program
-  for the whole tree (leaf by leaf, 40 one-robot SAC runs took 0.16 s a run on an H100), on the
-  host numpy views."""
+  for the whole tree (not one dispatch per leaf), on the host numpy views."""
   if all(isinstance(x, np.ndarray) for x in jax.tree_util.tree_leaves(states)):
     return jax.tree_util.tree_map(lambda x: x[i], states)
   return _device_slice(states, i)
@@ -46,8 +45,9 @@ def run_slice(states, i: int):
 
 def round_gap(round_s: float, share: float = CHECKPOINT_SHARE) -> float:
   """Seconds to wait after a checkpoint round of round_s seconds so that rounds take at most
-  `share` of the wall time (a round of 40 one-robot SAC runs with their replay buffers took ~20 s
-  on an H100: at the default 60 s between rounds, a quarter of the program's time)."""
+  `share` of the wall time (a round of 20 one-robot SAC runs with their replay buffers took 7 s on
+  an H100, results/speed/profile/: 40 runs' at the default 60 s between rounds, a fifth of the
+  program's time)."""
   return round_s * (1.0 / share - 1.0)
 
 
