@@ -77,6 +77,30 @@ def test_a_programs_checkpoint_rounds_take_at_most_a_tenth_of_its_wall_time():
   assert all(0.9 <= m.checkpointer.gap_s < 10 for m in members)  # 9 x a round of ~0.1 s
 
 
+def test_an_updates_metrics_go_to_the_host_once_for_every_runs_report_and_each_run_reads_its_own(monkeypatch):
+  from train.core import group_loop
+  fetched = []
+  monkeypatch.setattr(group_loop, "to_host", lambda tree: fetched.append(1) or jax.device_get(tree))
+
+  class Kept(Rows):
+    def __call__(self, step, metrics):
+      self.rows.append(metrics)
+      return {"step": step}
+
+  def update(states):  # run i finishes 1 episode of return i + 1 and 2 of return 0 per update
+    return states, {"episode/sum_reward": jnp.arange(1.0, 4.0), "episode/count": jnp.full(3, 3.0),
+                    "training/loss": jnp.asarray([0.5, 1.5, 2.5])}
+
+  reporters = [Kept() for _ in range(3)]
+  members = [Member(Checkpointer(None, {}, None, lambda step: None, every_s=1e9), r, Schedule(200), lambda r: r.step)
+             for r in reporters]
+  GroupLoop(update, 100, members, types.SimpleNamespace(requested=None)).run(jnp.zeros(3), 0, 400)
+  assert len(fetched) == 4  # one transfer per update, not one per run and metric
+  for i, r in enumerate(reporters):
+    assert [m["episode/sum_reward"] for m in r.rows] == pytest.approx([(i + 1) / 3] * 2)  # per episode, its own
+    assert [m["training/loss"] for m in r.rows] == pytest.approx([0.5 + i] * 2)
+
+
 def test_a_stop_request_ends_every_run_of_the_program():
   members = [Member(Checkpointer(None, {}, None, lambda step: None, every_s=1e9), Rows(), Schedule(100),
                     lambda r: (r.reason, r.step)) for _ in (0, 1)]

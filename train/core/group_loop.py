@@ -7,6 +7,7 @@ discarded, until every run has stopped (masking it would copy every run's state 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from typing import Any, Callable
 
@@ -41,6 +42,23 @@ def run_slice(states, i: int):
   if all(isinstance(x, np.ndarray) for x in jax.tree_util.tree_leaves(states)):
     return jax.tree_util.tree_map(lambda x: x[i], states)
   return _device_slice(states, i)
+
+
+class OnHost:
+  """An update's metrics (arrays with a leading run axis), fetched to the host in one transfer by
+  the first run's report that reads them and shared by every run's (each reads its own slot).
+  Read run by run from the device, each report of each run fetched every metric of every update
+  since the last (the paper preset, 40 runs: ~40 x 20 x 25 transfers per 1,000 steps)."""
+
+  def __init__(self, metrics: dict):
+    self._metrics = metrics
+
+  @functools.cached_property
+  def _host(self) -> dict:
+    return to_host(self._metrics)
+
+  def items(self):
+    return self._host.items()
 
 
 def round_gap(round_s: float, share: float = CHECKPOINT_SHARE) -> float:
@@ -132,6 +150,7 @@ class GroupLoop:
       if ckpt:
         self._checkpoint_round(states, step, active, clock)
       states, metrics = self.update(states)
+      metrics = OnHost(metrics)
       step += self.spu
       self.after_update(states, step)
       for i in active:
