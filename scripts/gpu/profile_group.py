@@ -3,7 +3,8 @@ training step's seconds per control step, the same for the environments' steps a
 no learning: the physics and the env's bookkeeping), and a profile of one training step on the
 device: how many kernels it launches per control step, how long the device is busy against the
 wall time, how many device-to-host copies (each while-loop iteration's predicate on a GPU), and
-the kernels that take the most time; and the same for the program's Brax evaluation. Writes OUT/profile-group.json with the device, command and date.
+the kernels that take the most time; and the same for the program's Brax evaluation. Writes
+OUT/profile-group.json with the device, command and date.
 
 Usage (GPU host): python scripts/gpu/profile_group.py OUT [--runs 1,20,40] [--updates 4] -- TRAIN.RUN ARGS
 E.g. the paper study's SAC program: -- --tasks asc-inc-cog,asc-uni-cog,des-inc-ang,des-uni-ang --algo sac
@@ -27,8 +28,8 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from train.core.group import build_group, group_evaluations, group_tasks, init_group, lower_group  # noqa: E402
-from train.run import group_plans, parser  # noqa: E402
-from train.run import plan_run  # noqa: E402
+from train.core.build import learner_on  # noqa: E402
+from train.run import group_plans, parser, plan_run  # noqa: E402
 
 
 def plans_of(argv: list[str], n: int):
@@ -40,9 +41,7 @@ def plans_of(argv: list[str], n: int):
   per = n // len(tasks)
   if n == 1:
     return [plan_run(argparse.Namespace(**{**vars(args), "seed": 0, "out": None}))]
-  if per == 1 and len(tasks) == 1:
-    raise SystemExit("error: use --runs 1 for one run")
-  args.seeds = ",".join(str(s) for s in range(max(per, 1)))
+  args.seeds = ",".join(str(s) for s in range(per))
   return group_plans(args)
 
 
@@ -75,7 +74,7 @@ def robots_of(t) -> int:
 
 
 def learner_env(t, d):
-  from train.core.build import learner_on  # noqa: PLC0415
+  """The training environment of a run whose task is data d (a program of several tasks)."""
   return learner_on(t, d).env
 
 
