@@ -58,24 +58,13 @@ def seconds_per_call(f, x, calls: int):
 def env_steps(t, n: int, tasks, length: int):
   """length control steps of every run's environments at zero action, one program (no learning)."""
   env = t.learner.env
-  zeros = jnp.zeros((n, robots_of(t), env.action_size))
+  zeros = jnp.zeros((n, t.plan.num_envs, env.action_size))
 
   def body(s, _):
     if tasks is None:
       return jax.vmap(env.step)(s, zeros), ()
-    return jax.vmap(lambda st, a, d: learner_env(t, d).step(st, a))(s, zeros, tasks), ()
+    return jax.vmap(lambda st, a, d: learner_on(t, d).env.step(st, a))(s, zeros, tasks), ()
   return jax.jit(lambda s: jax.lax.scan(body, s, (), length=length)[0])
-
-
-def robots_of(t) -> int:
-  """Robots of each run (SAC keeps num_envs, PPO its layout's)."""
-  learner = t.learner
-  return learner.num_envs if hasattr(learner, "num_envs") else learner.layout.num_envs
-
-
-def learner_env(t, d):
-  """The training environment of a run whose task is data d (a program of several tasks)."""
-  return learner_on(t, d).env
 
 
 def trace_summary(folder: pathlib.Path, control_steps: int, wall_s: float) -> dict:
@@ -110,7 +99,7 @@ def measure(argv: list[str], n: int, updates: int, out: pathlib.Path) -> dict:
   compiled = lower_group(t, n, tasks).compile()
   compile_s = time.time() - t0
   update = compiled if tasks is None else (lambda s: compiled(s, tasks))
-  steps = t.learner.steps_per_update // robots_of(t)  # control steps of each environment per update
+  steps = t.learner.steps_per_update // t.plan.num_envs  # control steps of each environment per update
   states, per_update = seconds_per_call(lambda s: update(s)[0], init_group(t, plans, tasks), updates)
   folder = out / f"trace-{n}"
   with jax.profiler.trace(str(folder), create_perfetto_trace=True):
@@ -119,7 +108,7 @@ def measure(argv: list[str], n: int, updates: int, out: pathlib.Path) -> dict:
     traced_s = time.perf_counter() - t1
   physics = env_steps(t, n, tasks, steps)
   _, env_per_call = seconds_per_call(physics, states.env_state, updates)
-  return {"runs": n, "robots_per_run": robots_of(t), "compile_s": round(compile_s, 1),
+  return {"runs": n, "robots_per_run": t.plan.num_envs, "compile_s": round(compile_s, 1),
           "control_steps_per_update": steps, "training_ms_per_control_step": round(per_update * 1e3 / steps, 3),
           "env_only_ms_per_control_step": round(env_per_call * 1e3 / steps, 3),
           "traced_update": trace_summary(folder, steps, traced_s), **evaluation(t, plans, tasks, states, out / f"trace-eval-{n}")}
