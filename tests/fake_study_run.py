@@ -3,7 +3,7 @@ folder with a checkpoint every 100 steps (0.1 s each) and records the run and on
 checkpoint in its database (with --seeds S,S,..., one folder OUT/s<seed> per seed, with --tasks T,T,...
 OUT/<task>/s<seed>, with --early-stops C,C,... OUT/stop-<criterion>/... (train.core.run_record.seed_folder),
 side by side; each run.json lists its sessions' seeds (and tasks, early stops) under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
-scene of fake_success() and writes eval-hardest.json (with --baseline NAME --task TASK, first a run
+scene of fake_success() and writes eval-hardest.json (with several RUNs, each) (with --baseline NAME --task TASK, first a run
 record of its own). FAKE_CRASH_SEED: that seed's first session
 exits 1 after its checkpoint at FAKE_CRASH_STEP (default 100); FAKE_EARLY_SEED: that seed's run stops
 early at step 200 (status stopped_early); FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
@@ -108,7 +108,13 @@ def train(argv: list[str]) -> int:
 
 
 def evaluate(argv: list[str]) -> int:
-  out, trials = argv[0], int(argv[argv.index("--trials") + 1])
+  """Each RUN given before the options (a pack's runs together), or a baseline's folder."""
+  runs = argv[:next(i for i, a in enumerate(argv) if a.startswith("--"))]
+  return max(evaluate_one(out, argv) for out in runs)
+
+
+def evaluate_one(out: str, argv: list[str]) -> int:
+  trials = int(argv[argv.index("--trials") + 1])
   db = ExperimentDB(argv[argv.index("--db") + 1])
   if "--baseline" in argv:  # a baseline: a run record of its own, nothing trained
     name, task = argv[argv.index("--baseline") + 1], argv[argv.index("--task") + 1]

@@ -76,7 +76,7 @@ def test_an_evaluation_of_fewer_trials_never_overwrites_a_fuller_report(tmp_path
     args = argparse.Namespace(run_dir=str(tmp_path / "r"), trials=trials, eps=1.0, checkpoint=None, out=None,
                               db=db.path, argv=["r", "--trials", str(trials)])
     figures = {k: np.full(trials, 0.5) for k in EPISODE_NAMES}
-    return evaluate._write_report(args, meta, "hardest", None, 100, figures)
+    return evaluate._write_report(args, args.run_dir, meta, "hardest", None, 100, figures)
 
   full = write(100)
   assert full.endswith("eval-hardest.json") and len(db.eval_groups("r")[("hardest", None)]) == 100
@@ -108,12 +108,12 @@ def test_the_compile_estimate_is_the_longest_compilation_seen(tmp_path, monkeypa
 def test_train_evaluate_takes_several_scenes_each_once_and_refuses_them_beside_the_suite():
   cfg = load_config("nav")
   args = evaluate.parser().parse_args(["r", "--scene", "nav/hallway", "--scene", "nav/zigzag", "--scene", "nav/hallway"])
-  assert evaluate._jobs(args, cfg)[0] == ["nav/hallway", "nav/zigzag"]  # argparse once kept only the last
-  assert evaluate._jobs(evaluate.parser().parse_args(["r"]), load_config("asc-inc-cog"))[0] == ["hardest"]
+  assert evaluate._jobs(args, cfg, "r")[0] == ["nav/hallway", "nav/zigzag"]  # argparse once kept only the last
+  assert evaluate._jobs(evaluate.parser().parse_args(["r"]), load_config("asc-inc-cog"), "r")[0] == ["hardest"]
   with pytest.raises(ValueError, match="give one of them"):
-    evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--suite"]), cfg)
+    evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--suite"]), cfg, "r")
   with pytest.raises(ValueError, match="one scene"):
-    evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--scene", "nav/zigzag", "--out", "x"]), cfg)
+    evaluate._jobs(evaluate.parser().parse_args(["r", "--scene", "uniform", "--scene", "nav/zigzag", "--out", "x"]), cfg, "r")
 
 
 def test_a_trained_run_is_evaluated_on_held_out_scenes_added_since_but_never_on_another_task(capsys):
@@ -128,3 +128,8 @@ def test_a_trained_run_is_evaluated_on_held_out_scenes_added_since_but_never_on_
   assert [(h.name, h.length) for h in longer.evaluation.held_out_nav] == [("long-area", 18.0)]
   assert "held-out/long-area" in evaluate.suite_scenes(longer)
   _one_line_error(capsys, evaluate_main([run_dir, "--set", "reward.goal_bonus=3"]), "only evaluation.* keys")
+
+
+def test_train_evaluate_refuses_what_takes_one_run_beside_several_runs(capsys, tmp_path):
+  for extra in (["--out", "x.json"], ["--checkpoint"], ["--video", "v.gif"], ["--baseline", "zero", "--task", "asc-inc-cog"]):
+    _one_line_error(capsys, evaluate.main([str(tmp_path / "a"), str(tmp_path / "b"), *extra]), "take one RUN_DIR")

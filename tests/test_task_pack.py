@@ -153,6 +153,34 @@ def test_the_command_trains_each_task_with_each_seed_and_early_stop_and_records_
     db = ExperimentDB(default_path(str(folder.parent)))
     assert [r["run_id"] for r in db.runs()] == [record["run_id"]] and db.stats(record["run_id"])  # its rows, its statistics
     assert db.run(record["run_id"])["status"] == ("done" if cell.group == "whole" else "stopped_early")
+  _the_runs_evaluated_together_get_what_each_gets_alone([str(out / m) for m in pack_folders(pack)])
+
+
+def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
+  """`train.evaluate RUN RUN ...` (a study's pack): the four runs' suites in one program, the two
+  tasks as data; each run's reports and trial rows its own (the database beside its folder), each
+  as `train.evaluate RUN` of the run alone writes them (the same trials: floats within the vmap's
+  rounding)."""
+  from train import evaluate
+  from train.db import ExperimentDB, default_path
+  from train.evaluation import report_path, suite_scenes
+  assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
+  scenes = suite_scenes(load_config(ASC))
+  assert len(scenes) >= 4 and scenes == suite_scenes(load_config(DES))
+  together = {(f, scene): json.load(open(report_path(f, scene, None))) for f in folders for scene in scenes}
+  for f in folders:
+    run_id = json.load(open(os.path.join(f, "run.json")))["run_id"]
+    rows = ExperimentDB(default_path(os.path.dirname(f))).evals(run_id)
+    assert sorted((r["scene"], r["trial"]) for r in rows) == sorted((sc, i) for sc in scenes for i in range(3))
+  assert together[(folders[0], "hardest")]["per_trial"]["final_z"] != together[(folders[1], "hardest")]["per_trial"]["final_z"]
+  for f in (folders[1], folders[2]):  # a descent run, and an ascent run of the other early stop
+    assert evaluate.main([f, "--suite", "--trials", "3"]) == 0
+    for scene in scenes:
+      alone = json.load(open(report_path(f, scene, None)))
+      assert alone["run_id"] == together[(f, scene)]["run_id"]
+      for name in ("progress", "pitch_rate", "final_x", "final_z", "length"):
+        np.testing.assert_allclose(together[(f, scene)]["per_trial"][name], alone["per_trial"][name], rtol=1e-4,
+                                   atol=1e-5, err_msg=f"{f} {scene} {name}")
 
 
 def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):

@@ -16,7 +16,10 @@ Writes RUN_DIR/eval-<scene>[@<budget>].json (mean +- std of progress, success, C
 Every trial's start is varied by the task's evaluation.trial_variation (position, yaw, joints), so
 the trials are samples. `--baseline NAME --task TASK [RUN_DIR]` evaluates a baseline policy
 (mjx_tracks.baselines: zero, full, random, scripted) the same way, recorded as a run of algorithm
-`baseline` (default folder runs/baselines/TASK-NAME).
+`baseline` (default folder runs/baselines/TASK-NAME). `RUN_DIR RUN_DIR ...` evaluates several runs
+in one process, the runs of one network whose tasks one program can take as data (a study's pack:
+`train.run --seeds` / `--tasks`) in one vmapped rollout per scene program, every run's reports and
+trial rows its own (the same trials as alone; floats within the vmap's rounding).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import functools
+import json
 import os
 import sys
 
@@ -34,8 +38,8 @@ from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.evaluation import (EVAL_EPS, EVAL_SEED, EVAL_TRIALS, SCENES, fewer_trials_path, milestone_folder,
-                              ROBUST, report_path, robustness_bases, robustness_runner, robustness_scenes, saved_milestones, scene_config, suite_scenes,
-                              trial_runner, trials_in)
+                              ROBUST, pack_trial_runner, report_path, robustness_bases, robustness_runner, robustness_scenes,
+                              saved_milestones, scene_config, suite_scenes, trial_runner, trials_in)
 from train.core.run_record import read_run_record, run_id_in, write_run_record
 
 BASELINE_ROOT = os.path.join("runs", "baselines")  # where --baseline runs go unless RUN_DIR is given
@@ -100,11 +104,11 @@ def _baseline_record(args) -> dict:
   return meta
 
 
-def _record_trials(args: argparse.Namespace, run_id: str, scene: str, budget: int | None,
+def _record_trials(args: argparse.Namespace, run_dir: str, run_id: str, scene: str, budget: int | None,
                    per_trial: dict) -> None:
   """One database row per trial, where the run is in the database."""
   from train.db import ExperimentDB, default_path  # noqa: PLC0415
-  db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(args.run_dir))))
+  db = ExperimentDB(args.db or default_path(os.path.dirname(os.path.abspath(run_dir))))
   try:
     db.run(run_id)
   except KeyError:
@@ -116,7 +120,10 @@ def _record_trials(args: argparse.Namespace, run_id: str, scene: str, budget: in
 
 def parser() -> argparse.ArgumentParser:
   p = argparse.ArgumentParser(prog="python -m train.evaluate", description=__doc__.splitlines()[0])
-  p.add_argument("run_dir", nargs="?", help="a run folder (with --baseline: where the baseline's records go)")
+  p.add_argument("run_dirs", nargs="*", metavar="RUN_DIR", help="a run folder (with --baseline: where the "
+                 "baseline's records go); several: evaluated together, one program for the runs of one network "
+                 "whose tasks may share one (a pack's: train.run --seeds / --tasks), each run's reports and "
+                 "records its own")
   p.add_argument("--baseline", choices=tuple(BASELINES), help="evaluate a baseline policy on --task instead of "
                  "a trained one (mjx_tracks.baselines)")
   p.add_argument("--task", help="with --baseline: the task")
@@ -155,6 +162,34 @@ def _policies(args, budgets: list[int | None], cfg: TaskConfig):
   return {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}, (lambda s: s.obs)
 
 
+def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: list[tuple[str, dict]],
+                      budgets: list[list[int | None]]):
+  """Each scene with the policy of each budget of every run (runs[i]: (folder, record), config
+  cfgs[i]) in one vmapped rollout (train.evaluation.pack_trial_runner: one compilation per program
+  of scene_programs), every run's reports and trials its own; yields the summary lines."""
+  import jax  # noqa: PLC0415
+  import numpy as np  # noqa: PLC0415
+  slots = [(i, b) for i, bs in enumerate(budgets) for b in bs]  # one policy each
+  loaded = [_policy(runs[i][0], None, b) for i, b in slots]  # (make_act, params, step): one network (_several)
+  params = jax.tree_util.tree_map(lambda *x: np.stack(x), *[p for _, p, _ in loaded])
+  own = [cfgs[i] for i, _ in slots]
+  run = pack_trial_runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
+                          None if all(c == cfgs[0] for c in own) else own)
+  for scene in scenes:
+    print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
+          f"for {len(slots)} policies of {len(runs)} runs in one program (compiling it first where no scene "
+          "before it shares it) ...", file=sys.stderr, flush=True)
+    for (i, budget), (_, _, step), per_trial in zip(slots, loaded, run(params, scene)):
+      folder, meta = runs[i]
+      out = _write_report(args, folder, meta, scene, budget, step, per_trial)
+      yield _summary(meta["task"], scene, budget, args.trials, per_trial, out)
+
+
+def _network(run_dir: str) -> str:
+  from train.core.policy import load_policy_info  # noqa: PLC0415
+  return json.dumps(load_policy_info(os.path.join(run_dir, "policy"))["network"], sort_keys=True)
+
+
 def _evaluate(args, meta: dict, scenes: list[str], budgets: list[int | None], cfg0: TaskConfig):
   """Runs each scene with the policy of each budget (one compilation per program of
   scene_programs: one for every scene of a stair task); writes each report and its trials; yields
@@ -168,7 +203,7 @@ def _evaluate(args, meta: dict, scenes: list[str], budgets: list[int | None], cf
           "program: a minute or more the first time on this machine) ...", file=sys.stderr, flush=True)
     for budget, (_, params, policy_step) in policies.items():
       per_trial, qpos, render_model = run(params, scene)
-      out = _write_report(args, meta, scene, budget, policy_step, per_trial)
+      out = _write_report(args, args.run_dir, meta, scene, budget, policy_step, per_trial)
       if args.video:
         from mjx_tracks.tools.render import camera_for, render_frames, write_video  # noqa: PLC0415
         shown = qpos[:int(per_trial["length"][0]) + 1]  # the reset, then trial 0 until its episode ended
@@ -190,12 +225,13 @@ def _evaluate_robustness(args, meta: dict, bases: list[str], budgets: list[int |
     for budget, (_, params, policy_step) in policies.items():
       for case, per_trial in run(params, base).items():
         scene = f"{base}{ROBUST}{case}"
-        out = _write_report(args, meta, scene, budget, policy_step, per_trial)
+        out = _write_report(args, args.run_dir, meta, scene, budget, policy_step, per_trial)
         yield _summary(meta["task"], scene, budget, args.trials, per_trial, out)
 
 
-def _write_report(args, meta: dict, scene: str, budget: int | None, policy_step, per_trial: dict) -> str:
-  """RUN/eval-<scene>[@<budget>].json (or --out) and the database's trial rows; returns the path.
+def _write_report(args, run_dir: str, meta: dict, scene: str, budget: int | None, policy_step,
+                  per_trial: dict) -> str:
+  """RUN_DIR/eval-<scene>[@<budget>].json (or --out) and the database's trial rows; returns the path.
   A report of more trials already there is kept, with its rows: this one goes beside it
   (fewer_trials_path) and not to the database."""
   import jax  # noqa: PLC0415
@@ -207,15 +243,15 @@ def _write_report(args, meta: dict, scene: str, budget: int | None, policy_step,
       "per_trial": {k: v.tolist() for k, v in per_trial.items()},
       "device": str(jax.devices()[0]), "command": "python -m train.evaluate " + " ".join(args.argv),
       "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
-  out = args.out or report_path(args.run_dir, scene, budget)
+  out = args.out or report_path(run_dir, scene, budget)
   fuller = None if args.out else trials_in(out)
   if fuller is not None and fuller > args.trials:
     out = fewer_trials_path(out, args.trials)
-    print(f"note: kept {report_path(args.run_dir, scene, budget)} ({fuller} trials) and its database rows; "
+    print(f"note: kept {report_path(run_dir, scene, budget)} ({fuller} trials) and its database rows; "
           f"this {args.trials}-trial result goes to {out} only", file=sys.stderr)
   atomic.write_json(out, report)
   if fuller is None or fuller <= args.trials:
-    _record_trials(args, meta["run_id"], scene, budget, per_trial)
+    _record_trials(args, run_dir, meta["run_id"], scene, budget, per_trial)
   return out
 
 
@@ -230,7 +266,7 @@ def _summary(task: str, scene: str, budget: int | None, trials: int, per_trial: 
   return f"{task} {scene}{at}: {trials} trials, {', '.join(figures)} -> {out}"
 
 
-def _jobs(args, cfg: TaskConfig) -> tuple[list[str], list[str], list[int | None]]:
+def _jobs(args, cfg: TaskConfig, run_dir: str | None) -> tuple[list[str], list[str], list[int | None]]:
   """(scenes, base scenes of the robustness suite: every case on each in one batch, milestone
   budgets with None for the final policy) to evaluate; ValueError on bad input."""
   if args.scene is not None and (args.suite or args.robustness):
@@ -248,7 +284,7 @@ def _jobs(args, cfg: TaskConfig) -> tuple[list[str], list[str], list[int | None]
   if args.milestones:
     if args.checkpoint is not None:
       raise ValueError("--milestones evaluates exported policies; drop --checkpoint")
-    budgets = [*saved_milestones(args.run_dir), None]
+    budgets = [*saved_milestones(run_dir), None]
   if len(scenes) * len(budgets) > 1 and (args.out or args.video):
     raise ValueError("--out and --video take one scene and one policy")
   return scenes, bases, budgets
@@ -264,23 +300,54 @@ def main(argv: list[str] | None = None) -> int:
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   try:
-    if args.baseline:
-      meta = _baseline_record(args)
-    elif args.run_dir is None or args.task:
-      raise ValueError("give a RUN_DIR to evaluate a trained run (its config is recorded), or --baseline NAME "
-                       "--task TASK [--set KEY=VALUE ...]")
-    else:
-      meta = read_run_record(args.run_dir)
-    cfg = recorded_config(meta["config"], () if args.baseline else args.set)
-    scenes, bases, budgets = _jobs(args, cfg)
-    for line in _evaluate(args, meta, scenes, budgets, cfg) if scenes else ():
-      print(line, flush=True)
-    for line in _evaluate_robustness(args, meta, bases, budgets, cfg) if bases else ():
+    lines = _one(args) if len(args.run_dirs) <= 1 else _several(args)
+    for line in lines:
       print(line, flush=True)
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
   return 0
+
+
+def _one(args):
+  """The summary lines of one run's (or a baseline's) evaluation."""
+  args.run_dir = args.run_dirs[0] if args.run_dirs else None
+  if args.baseline:
+    meta = _baseline_record(args)
+  elif args.run_dir is None or args.task:
+    raise ValueError("give a RUN_DIR to evaluate a trained run (its config is recorded), or --baseline NAME "
+                     "--task TASK [--set KEY=VALUE ...]")
+  else:
+    meta = read_run_record(args.run_dir)
+  cfg = recorded_config(meta["config"], () if args.baseline else args.set)
+  scenes, bases, budgets = _jobs(args, cfg, args.run_dir)
+  yield from _evaluate(args, meta, scenes, budgets, cfg) if scenes else ()
+  yield from _evaluate_robustness(args, meta, bases, budgets, cfg) if bases else ()
+
+
+def _several(args):
+  """The summary lines of several runs' evaluations: the scenes of runs that may share a program in
+  one (_evaluate_several, in groups: mjx_tracks.envs.task_data.packing_conflict), the robustness
+  suite run by run."""
+  from mjx_tracks.envs.task_data import packing_conflict  # noqa: PLC0415
+  if args.baseline or args.task or args.out or args.video or args.checkpoint is not None:
+    raise ValueError("--baseline, --task, --out, --video and --checkpoint take one RUN_DIR")
+  runs = [(d, read_run_record(d)) for d in dict.fromkeys(args.run_dirs)]
+  cfgs = [recorded_config(meta["config"], args.set) for _, meta in runs]
+  jobs = [_jobs(args, cfg, d) for cfg, (d, _) in zip(cfgs, runs)]
+  groups: list[list[int]] = []
+  for i, cfg in enumerate(cfgs):
+    fits = (g for g in groups if packing_conflict(cfg, cfgs[g[0]]) is None and jobs[i][0] == jobs[g[0]][0]
+            and _network(runs[i][0]) == _network(runs[g[0]][0]))
+    group = next(fits, None)
+    groups.append([i]) if group is None else group.append(i)
+  for g in groups:
+    if jobs[g[0]][0]:
+      yield from _evaluate_several(args, jobs[g[0]][0], [cfgs[i] for i in g], [runs[i] for i in g],
+                                   [jobs[i][2] for i in g])
+  for (d, meta), cfg, (_, bases, budgets) in zip(runs, cfgs, jobs):
+    if bases:
+      yield from _evaluate_robustness(argparse.Namespace(**{**vars(args), "run_dir": d}), meta, bases, budgets, cfg)
 
 
 if __name__ == "__main__":

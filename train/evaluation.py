@@ -236,31 +236,48 @@ def trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps
 
 def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps: float, seed: int,
                        configs: list[TaskConfig] | None = None):
-  """run(params with a leading run axis) -> [per-trial figures of each run]: trial_runner's trials
-  on `scene` for several policies of one network in one program (the rollout vmapped over the
-  policies: the runs of one `train.run --seeds` program probed at once). configs: each run's task
-  where the runs' tasks differ (mjx_tracks.envs.task_data): each run's trials are then those of
-  `scene` of its own task (its stair direction, its reward's safety term)."""
+  """run(params with a leading run axis) -> [per-trial figures of each run]: pack_trial_runner on
+  one scene (the runs of one `train.run --seeds` program probed at once)."""
+  run = pack_trial_runner(cfg0, [scene], make_act, trials, eps, seed, configs)
+  return lambda params: run(params, scene)
+
+
+def pack_trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps: float, seed: int,
+                      configs: list[TaskConfig] | None = None):
+  """run(params with a leading policy axis, scene) -> [per-trial figures of each policy]:
+  trial_runner's trials on any of `scenes` for several policies of one network in one program (the
+  rollout vmapped over the policies), compiled once per program of scene_programs (one for every
+  scene of a stair task). configs: each policy's task where they differ (mjx_tracks.envs.task_data:
+  runs that may share a program); each policy's trials are then those of the scene of its own task
+  (its stair direction, its reward's safety term). A policy's trials are those trial_runner gives it
+  alone: the same keys, starts and scenes (floats within the vmap's rounding)."""
   import jax  # noqa: PLC0415
 
   from mjx_tracks.envs.task_data import stacked, task_data  # noqa: PLC0415
+  from mjx_tracks.envs.task_env import TrackedRobotEnv  # noqa: PLC0415
   keys = trial_keys(trials, seed)
-  core, draw = scene_env(cfg0, scene)
-  if configs is None:
-    _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core)
-    compiled = jax.jit(jax.vmap(lambda params, draw: rollout(params, keys, None, draw)[0], in_axes=(0, None)))
-  else:  # each run's task: its scene's config in the program of cfg0's (scene_programs), as data
-    draw = stacked([task_data(scene_config(c, scene), core.cfg) for c in configs])  # what run() passes
+  programs = {}
+  for cfg, draws in scene_programs(cfg0, scenes):
+    core = TrackedRobotEnv(cfg)
+    if configs is None:
+      _, rollout = trial_rollout(cfg, make_act, trials, eps, core=core)
+      compiled = jax.jit(jax.vmap(lambda params, draw, rollout=rollout: rollout(params, keys, None, draw)[0],
+                                  in_axes=(0, None)))
+      programs.update({scene: (compiled, draw) for scene, draw in draws.items()})
+      continue
 
-    def each(params, task):
-      _, rollout = trial_rollout(core.cfg, make_act, trials, eps, core=core.for_task(task))
+    def each(params, task, cfg=cfg, core=core):
+      _, rollout = trial_rollout(cfg, make_act, trials, eps, core=core.for_task(task))
       return rollout(params, keys, None, task.draw)[0]
     compiled = jax.jit(jax.vmap(each))
+    # each run's task: its scene's config in this program (scene_programs), as data
+    programs.update({scene: (compiled, stacked([task_data(scene_config(c, scene), cfg) for c in configs]))
+                     for scene in draws})
 
-  def run(params) -> list[dict]:
-    acc = compiled(params, draw)
-    runs = len(acc["length"])
-    return [per_trial_figures({k: v[i] for k, v in acc.items()}) for i in range(runs)]
+  def run(params, scene: str) -> list[dict]:
+    compiled, data = programs[scene]
+    acc = compiled(params, data)
+    return [per_trial_figures({k: v[i] for k, v in acc.items()}) for i in range(len(acc["length"]))]
 
   return run
 

@@ -13,7 +13,6 @@ import subprocess
 import sys
 import tarfile
 import tempfile
-import time
 
 from mjx_tracks import atomic
 from train.core.run_record import run_id_in
@@ -104,22 +103,22 @@ def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
              commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
   """First attempts of cells that differ only in their seed (and task, early stop:
   train.study.spec.packs_of), as one program (`train.run --seeds [--tasks] [--early-stops]`);
-  members: each run's folder in the program's output (train.study.spec.pack_folders); then the evaluation of each run that ended (its total steps or
-  its early stop; also where the program failed later, e.g. by another run), side by side (at
-  most evaluations_at_once at a time).
+  members: each run's folder in the program's output (train.study.spec.pack_folders); then the
+  runs that ended (their total steps or their early stop; also where the program failed later, e.g.
+  by another run) are evaluated together, in one process (_evaluate_together). Returns
   {"cells": {member: run_cell's result}}: each run's folder comes back with its own records
-  (run.sqlite) and the pack's training output."""
+  (run.sqlite) and the pack's training and evaluation output."""
   scratch = tempfile.mkdtemp(prefix="study-pack-")
   out, shared_db, log = (os.path.join(scratch, name) for name in ("pack", "pack.sqlite", "train.log"))
   try:
     rc = _call([sys.executable, *commands[0], *pack_args, "--out", out, "--db", shared_db], log, None, "train")
     folders = {m: os.path.join(out, m) for m in members}
-    ended = [m for m in members if _ended(folders[m], shared_db)]
-    for m in members:  # each run's rows in a database of its own, as a single run's
+    ended = {m: folders[m] for m in members if _ended(folders[m], shared_db)}
+    evaluated = _evaluate_together(ended, eval_args, commands[1], shared_db, scratch) if eval_args and ended \
+        else {m: ("train", 0, "") for m in ended}
+    for m in members:  # each run's rows (training and evaluation) in a database of its own, as a single run's
       if os.path.isdir(folders[m]) and os.path.exists(shared_db):
         ExperimentDB(os.path.join(folders[m], RUN_DB)).import_runs(shared_db, only=[run_id_in(folders[m])])
-    evaluated = _evaluate_side_by_side({m: folders[m] for m in ended}, eval_args, commands[1], scratch) \
-        if eval_args else {m: ("train", 0, "") for m in ended}
     trained, results = open(log).read() if os.path.exists(log) else "", {}
     for m in members:  # a run that did not end failed with the program (its checkpoints, if any, come back)
       phase, code, output = evaluated.get(m, ("train", rc or 1, ""))
@@ -140,71 +139,16 @@ def _ended(folder: str, db: str) -> bool:
     return False
 
 
-def evaluations_at_once() -> int:
-  """How many of a pack's evaluation processes run at once: one per CPU core this process may use
-  (each compiles its programs on the CPU first; a pack of 40 one-robot runs would otherwise start 40
-  JAX processes together)."""
-  return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-
-
-def _evaluate_side_by_side(folders: dict[str, str], eval_args: list[str], command: tuple[str, ...],
-                           scratch: str, at_once: int | None = None) -> dict[str, tuple[str, int, str]]:
-  """Evaluates the run folders, at most `at_once` (evaluations_at_once) processes at a time, one
-  each (on a GPU none preallocates memory), a run of a configuration evaluated already only after
-  its first (compile_leads); {member: ("evaluate", exit code, output)}. Any started process is
-  waited for, whatever happens."""
-  env = {**os.environ, "XLA_PYTHON_CLIENT_PREALLOCATE": "false"}
-  at_once = at_once or evaluations_at_once()
-  lead = compile_leads(folders)
-  waiting = sorted(folders.items(), key=lambda item: lead[item[0]] is not None)  # the leads first
-  running, done = {}, {}
-  try:
-    while waiting or running:
-      while (ready := [w for w in waiting if lead[w[0]] is None or lead[w[0]] in done]) and len(running) < at_once:
-        m, folder = ready[0]
-        waiting.remove(ready[0])
-        with open(os.path.join(scratch, f"evaluate-{m.replace(os.sep, '-')}.log"), "w") as log:
-          argv = _evaluate_argv(command, folder, eval_args, os.path.join(folder, RUN_DB))
-          running[m] = (subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env), log.name)
-      m = _first_ended(running)
-      proc, name = running.pop(m)
-      done[m] = ("evaluate", proc.returncode, open(name).read())
-  finally:
-    for m, (proc, name) in running.items():
-      done[m] = ("evaluate", proc.wait(), open(name).read())
-  return done
-
-
-def compile_leads(folders: dict[str, str]) -> dict[str, str | None]:
-  """{member: the member whose evaluation it waits for, or None}: runs of one configuration
-  (run.json's config, algorithm, preset and hyperparameters; seeds apart) evaluate the same
-  programs, so the first of each compiles them alone and the others start once it has ended, from
-  JAX's persistent compilation cache (CPU, a task's suite at 4 trials: 25 s alone, 13 s after
-  another seed's). A folder without a readable run.json leads itself."""
-  first, lead = {}, {}
-  for m, folder in folders.items():
-    key = _program_key(folder) or m
-    lead[m] = first.get(key)
-    first.setdefault(key, m)
-  return lead
-
-
-def _program_key(folder: str) -> str | None:
-  try:
-    with open(os.path.join(folder, "run.json")) as f:
-      run = json.load(f)
-    return json.dumps([run[k] for k in ("config", "algo", "preset", "hp", "library")], sort_keys=True)
-  except (OSError, ValueError, KeyError):
-    return None
-
-
-def _first_ended(running: dict) -> str:
-  """The member whose process (running[member][0]) ends first, once it has."""
-  while True:
-    for m, (proc, _) in running.items():
-      if proc.poll() is not None:
-        return m
-    time.sleep(0.1)
+def _evaluate_together(folders: dict[str, str], eval_args: list[str], command: tuple[str, ...], db: str,
+                       scratch: str) -> dict[str, tuple[str, int, str]]:
+  """Evaluates the run folders in one process (`train.evaluate RUN RUN ...`: one program for the
+  runs that may share one), their trials recorded in the pack's database `db`; {member:
+  ("evaluate", the process's exit code, its output)}. One process per run, side by side, took 500 s
+  for a 40-run pack on one H200 (results/speed/group/paper-packed-2-H200-2026-11-28.md)."""
+  log = os.path.join(scratch, "evaluate.log")
+  rc = _call([sys.executable, *command, *folders.values(), *eval_args, "--db", db], log)
+  output = open(log).read() if os.path.exists(log) else ""
+  return {m: ("evaluate", rc, output) for m in folders}
 
 
 def _outcome(folder: str, rc: int, phase: str, output: str) -> dict:
