@@ -25,8 +25,12 @@ RUN_DB = "run.sqlite"  # each run's records travel inside its folder
 
 
 def pack(folder: str) -> bytes:
+  """The folder as a gzipped tar, at gzip's fastest level: a run folder is mostly checkpoints of
+  float arrays, which level 9 (the default) packs hardly smaller at twice the time (a 15 MB array:
+  7.50 MB in 0.46 s, level 1 7.55 MB in 0.22 s, on the 2-core machine); a 60-run study's folders
+  (1.9 GB) took 30-70 s to come back at level 9."""
   buf = io.BytesIO()
-  with tarfile.open(fileobj=buf, mode="w:gz") as tar:
+  with tarfile.open(fileobj=buf, mode="w:gz", compresslevel=1) as tar:
     tar.add(folder, arcname=".")
   return buf.getvalue()
 
