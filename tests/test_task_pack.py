@@ -80,9 +80,12 @@ def test_each_run_of_a_program_of_several_tasks_starts_as_it_would_alone(program
                for a, b in zip(jax.tree_util.tree_leaves(mine), jax.tree_util.tree_leaves(alone))), p.task
 
 
-def test_the_program_probes_each_run_on_its_own_tasks_probe_scene(program):
-  """The probe of both runs in one rollout: run 1's trials are those of the descent task's own
-  probe runner (its hardest staircase downwards), not the ascent's."""
+def test_the_program_probes_each_run_on_its_own_tasks_probe_scene(program, monkeypatch):
+  """The probe of both runs in one rollout (as on a GPU: on the CPU one run after another,
+  train.evaluation.vmapped_trials): run 1's trials are those of the descent task's own probe runner
+  (its hardest staircase downwards), not the ascent's."""
+  from train import evaluation
+  monkeypatch.setattr(evaluation, "vmapped_trials", lambda: True)
   t, plans, states = program
   params = to_host(t.learner.policy_params(states))
   act = act_from_params(t.spec)
@@ -164,7 +167,10 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
   from train import evaluate
   from train.db import ExperimentDB, default_path
   from train.evaluation import report_path, suite_scenes
-  assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
+  # on the CPU one policy after another (vmapped_trials); here vmapped, as on a GPU
+  with pytest.MonkeyPatch.context() as mp:
+    mp.setattr(evaluate, "vmapped_trials", lambda: True)
+    assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
   scenes = suite_scenes(load_config(ASC))
   assert len(scenes) >= 4 and scenes == suite_scenes(load_config(DES))
   together = {(f, scene): json.load(open(report_path(f, scene, None))) for f in folders for scene in scenes}
@@ -173,14 +179,18 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
     rows = ExperimentDB(default_path(os.path.dirname(f))).evals(run_id)
     assert sorted((r["scene"], r["trial"]) for r in rows) == sorted((sc, i) for sc in scenes for i in range(3))
   assert together[(folders[0], "hardest")]["per_trial"]["final_z"] != together[(folders[1], "hardest")]["per_trial"]["final_z"]
-  for f in folders[1:2]:  # a descent run: not the task whose environment the program builds
-    assert evaluate.main([f, "--suite", "--trials", "3"]) == 0
-    for scene in scenes:
-      alone = json.load(open(report_path(f, scene, None)))
-      assert alone["run_id"] == together[(f, scene)]["run_id"]
-      for name in ("progress", "pitch_rate", "final_x", "final_z", "length"):
-        np.testing.assert_allclose(together[(f, scene)]["per_trial"][name], alone["per_trial"][name], rtol=1e-4,
-                                   atol=1e-5, err_msg=f"{f} {scene} {name}")
+  # the descent run alone (not the task whose environment the program builds), then the runs
+  # together one policy after another (the CPU's way): each run's figures those the run gets alone
+  assert evaluate.main([folders[1], "--suite", "--trials", "3"]) == 0
+  alone = {scene: json.load(open(report_path(folders[1], scene, None))) for scene in scenes}
+  assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
+  for scene in scenes:
+    assert alone[scene]["run_id"] == together[(folders[1], scene)]["run_id"]
+    one_by_one = json.load(open(report_path(folders[1], scene, None)))
+    assert one_by_one["per_trial"] == alone[scene]["per_trial"]  # the same program: bit for bit
+    for name in ("progress", "pitch_rate", "final_x", "final_z", "length"):
+      np.testing.assert_allclose(together[(folders[1], scene)]["per_trial"][name], alone[scene]["per_trial"][name],
+                                 rtol=1e-4, atol=1e-5, err_msg=f"{scene} {name}")
 
 
 def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):

@@ -38,8 +38,9 @@ from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.evaluation import (EVAL_EPS, EVAL_SEED, EVAL_TRIALS, SCENES, fewer_trials_path, milestone_folder,
-                              ROBUST, pack_trial_runner, report_path, robustness_bases, robustness_runner, robustness_scenes,
-                              saved_milestones, scene_config, suite_scenes, trial_runner, trials_in)
+                              ROBUST, pack_trial_runner, policy_by_policy_runner, report_path, robustness_bases,
+                              robustness_runner, robustness_scenes, saved_milestones, scene_config, suite_scenes,
+                              trial_runner, trials_in, vmapped_trials)
 from train.core.run_record import read_run_record, run_id_in, write_run_record
 
 BASELINE_ROOT = os.path.join("runs", "baselines")  # where --baseline runs go unless RUN_DIR is given
@@ -166,15 +167,17 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
                       budgets: list[list[int | None]]):
   """Each scene with the policy of each budget of every run (runs[i]: (folder, record), config
   cfgs[i]) in one vmapped rollout (train.evaluation.pack_trial_runner: one compilation per program
-  of scene_programs), every run's reports and trials its own; yields the summary lines."""
+  of scene_programs; on the CPU one policy after another: vmapped_trials), every run's reports and
+  trials its own; yields the summary lines."""
   import jax  # noqa: PLC0415
   import numpy as np  # noqa: PLC0415
   slots = [(i, b) for i, bs in enumerate(budgets) for b in bs]  # one policy each
   loaded = [_policy(runs[i][0], None, b) for i, b in slots]  # (make_act, params, step): one network (_several)
   params = jax.tree_util.tree_map(lambda *x: np.stack(x), *[p for _, p, _ in loaded])
   own = [cfgs[i] for i, _ in slots]
-  run = pack_trial_runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
-                          None if all(c == cfgs[0] for c in own) else own)
+  runner = pack_trial_runner if vmapped_trials() else policy_by_policy_runner
+  run = runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
+               None if all(c == cfgs[0] for c in own) else own)
   for scene in scenes:
     print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
           f"for {len(slots)} policies of {len(runs)} runs in one program (compiling it first where no scene "

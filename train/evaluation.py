@@ -231,15 +231,27 @@ def trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps
     render_model = core.sim.c_model_with_boxes(scene0.box_pos, scene0.box_size, scene0.box_yaw) if record else None
     return per_trial_figures(acc), (np.asarray(qpos) if record else None), render_model
 
+  def compile_for(params, scene: str):
+    """The scene's program compiled for params like these, ahead of run (train.core.ahead)."""
+    _, compiled, draw = programs[scene]
+    return compiled.lower(params, keys, None, draw).compile()
+
+  run.compile_for = compile_for
   return run
 
 
 def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps: float, seed: int,
                        configs: list[TaskConfig] | None = None):
   """run(params with a leading run axis) -> [per-trial figures of each run]: pack_trial_runner on
-  one scene (the runs of one `train.run --seeds` program probed at once)."""
-  run = pack_trial_runner(cfg0, [scene], make_act, trials, eps, seed, configs)
-  return lambda params: run(params, scene)
+  one scene (the runs of one `train.run --seeds` program probed at once; on the CPU
+  policy_by_policy_runner: vmapped_trials)."""
+  run = (pack_trial_runner if vmapped_trials() else policy_by_policy_runner)(cfg0, [scene], make_act, trials, eps,
+                                                                             seed, configs)
+
+  def one(params):
+    return run(params, scene)
+  one.compile_for = lambda params: run.compile_for(params, scene)
+  return one
 
 
 def pack_trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps: float, seed: int,
@@ -279,6 +291,52 @@ def pack_trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int
     acc = compiled(params, data)
     return [per_trial_figures({k: v[i] for k, v in acc.items()}) for i in range(len(acc["length"]))]
 
+  def compile_for(params, scene: str):
+    """The scene's program compiled for params like these, ahead of run (train.core.ahead)."""
+    compiled, data = programs[scene]
+    return compiled.lower(params, data).compile()
+
+  run.compile_for = compile_for
+  return run
+
+
+def vmapped_trials() -> bool:
+  """Whether several policies' trials run vmapped in one program (pack_trial_runner) rather than
+  one policy after another (policy_by_policy_runner): not on the CPU, where a vmapped program gains
+  nothing over the cores it already uses, and where jaxlib 0.10.2's runtime stalls for good (no
+  core busy) on pack_trial_runner's rollout of 4 policies x 100 trials of two tasks (a GroupProbe of
+  4 one-robot runs of two tasks hangs the same way during training: 2026-11-28, this 2-core machine)."""
+  import jax  # noqa: PLC0415
+  return jax.default_backend() != "cpu"
+
+
+def policy_by_policy_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps: float, seed: int,
+                            configs: list[TaskConfig] | None = None):
+  """pack_trial_runner's run(params with a leading policy axis, scene), one policy after another,
+  each through trial_runner of its own task (compiled once per task, for every policy of it)."""
+  import jax  # noqa: PLC0415
+  runners: list = []  # (config, its trial_runner): configs compare by value
+
+  def runner(cfg):
+    found = next((r for c, r in runners if c == cfg), None)
+    if found is None:
+      runners.append((cfg, found := trial_runner(cfg, scenes, make_act, trials, eps, seed)))
+    return found
+
+  def each(params) -> list[tuple[TaskConfig, object]]:
+    n = len(jax.tree_util.tree_leaves(params)[0])
+    return list(zip(configs or [cfg0] * n, (jax.tree_util.tree_map(lambda x, i=i: x[i], params) for i in range(n))))
+
+  def run(params, scene: str) -> list[dict]:
+    return [runner(cfg)(p, scene)[0] for cfg, p in each(params)]
+
+  def compile_for(params, scene: str) -> None:
+    """Each task's program compiled for params like these, ahead of run (train.core.ahead)."""
+    for cfg, p in each(params):
+      if not any(c == cfg for c, _ in runners):
+        runner(cfg).compile_for(p, scene)
+
+  run.compile_for = compile_for
   return run
 
 

@@ -28,6 +28,7 @@ import os
 import sys
 
 from mjx_tracks.envs.config import ConfigError
+from train.core.ahead import CHOICES as AHEAD_CHOICES
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, criterion_name
@@ -86,6 +87,9 @@ def parser() -> argparse.ArgumentParser:
                  help=f"wall time between checkpoints (default {CHECKPOINT_EVERY_S:g} s)")
   p.add_argument("--keep-checkpoints", type=int, default=KEEP, metavar="K",
                  help=f"checkpoints kept (default {KEEP})")
+  p.add_argument("--compile-ahead", choices=AHEAD_CHOICES, default="auto",
+                 help="compile the in-training evaluations' programs in threads beside the training step's "
+                      "(auto: where JAX's backend is not the CPU; train.core.ahead)")
   p.add_argument("--coordinator", metavar="HOST:PORT",
                  help="one process of a multi-process run (jax.distributed): process 0's address")
   p.add_argument("--num-processes", type=int, help="with --coordinator: how many processes")
@@ -213,7 +217,8 @@ def _train_group(plans: list[RunPlan], args) -> int:
       dbs[i].finish(plans[i].run_id, ended[i], final, final.get("step"), _detail(ended[i], stop, plans[i]))
 
     try:
-      finals = train_group(t, plans, dbs, stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints), on_end)
+      finals = train_group(t, plans, dbs, stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints,
+                                                                args.compile_ahead), on_end)
     finally:
       for i, (q, db) in enumerate(zip(plans, dbs)):
         if i not in ended:  # the program failed before this run ended
@@ -234,7 +239,7 @@ def _own_session(plan: RunPlan, args, stop):
   early = f", early stop at {plan.early_stop}" if plan.early_stop else ""
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
         f"{device_summary()}, {plan.total_steps:,} steps{early} -> {plan.out_dir}", flush=True)
-  options = SessionOptions(args.checkpoint_every, args.keep_checkpoints)
+  options = SessionOptions(args.checkpoint_every, args.keep_checkpoints, args.compile_ahead)
   prepared = prepare(plan, options)
   return prepared.t.plan, lambda db: train(prepared, db, stop, options)
 

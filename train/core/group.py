@@ -20,6 +20,7 @@ import jax
 import jax.numpy as jnp
 
 from mjx_tracks.envs.task_data import TaskData, packed_keys, packing_conflict, stacked, task_data
+from train.core import ahead
 from train.core.build import Training, build, has_evaluations, learner_on
 from train.core.early_stop import criterion_name
 from train.core.group_evaluator import GroupEvaluator, evaluations_shared
@@ -189,9 +190,11 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   tasks = group_tasks(t, plans)
   configs = None if tasks is None else [p.cfg for p in plans]  # each run's, where the runs' tasks differ
   states = init_group(t, plans, tasks)
-  update = compile_group(t, len(plans), tasks=tasks)
   evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
+  if ahead.wanted(options.compile_ahead):
+    ahead.start((evaluate, probe), states)  # compiling beside the update's compilation
+  update = compile_group(t, len(plans), tasks=tasks)
   parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
                    lambda summary, i=i: on_end(i, summary), tag) for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]
   shared = [s for s in (evaluate, probe) if s is not None]

@@ -106,6 +106,10 @@ class GroupEvaluator(AllRuns):
     self._params = t.learner.policy_params
     super().__init__(self.evaluate)
 
+  def ahead_job(self, states):
+    params, unroll_keys = to_host(self._params(states)), jax.vmap(jax.random.split)(self._keys)[:, 1]
+    return lambda: self._unroll.lower(params, unroll_keys).compile()
+
   def evaluate(self, states) -> list[dict[str, float]]:
     """Every run's evaluation of the states' policies (each run's key advances as Brax's does)."""
     split = jax.vmap(jax.random.split)(self._keys)

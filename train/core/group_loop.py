@@ -14,6 +14,7 @@ from typing import Any, Callable
 import jax
 import numpy as np
 
+from train.core.ahead import CompiledAhead
 from train.core.loop import Checkpointer, Clock, LoopResult, Schedule, Track, _agree
 from train.core.mesh import to_host
 
@@ -69,7 +70,7 @@ def round_gap(round_s: float, share: float = CHECKPOINT_SHARE) -> float:
   return round_s * (1.0 / share - 1.0)
 
 
-class AllRuns:
+class AllRuns(CompiledAhead):
   """A computation over every run of a program at once (compute(states) -> one result per run, in
   the runs' order), asked for by each run in turn through its share (`member(i)`): the first run
   to ask after an update computes every run's (e.g. train.core.probe.GroupProbe,
@@ -96,6 +97,7 @@ class AllRuns:
   def result(self, i: int):
     """Run i's result for the states named last (computed for every run on the first question)."""
     if self._results is None:
+      self.ready()  # its programs compiled ahead, if they were (train.core.ahead)
       self._results = self._compute(self.states())
     return self._results[i]
 

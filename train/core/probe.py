@@ -12,6 +12,7 @@ import numpy as np
 
 from mjx_tracks.metrics import REPORT_COLUMN as COLUMNS  # per-trial figure -> report column
 from train.evaluation import EVAL_EPS, EVAL_SEED, EVAL_TRIALS, group_trial_runner, trial_runner
+from train.core.ahead import CompiledAhead
 from train.core.group_loop import AllRuns
 from train.core.mesh import to_host
 from train.core.policy import act_from_params
@@ -19,7 +20,7 @@ from train.core.policy import act_from_params
 PREFIX = "probe/"  # the probe's metrics: probe/<report column>
 
 
-class Probe:
+class Probe(CompiledAhead):
   """probe(state) -> {probe/<column>: mean over the trials} for a learner state."""
 
   def __init__(self, t, trials: int = EVAL_TRIALS):
@@ -28,8 +29,13 @@ class Probe:
     self._run = trial_runner(t.plan.cfg, [self._scene], act_from_params(t.spec), trials, EVAL_EPS, EVAL_SEED)
 
   def __call__(self, state) -> dict[str, float]:
+    self.ready()
     fig, _, _ = self._run(to_host(self._params(state)), self._scene)
     return means(fig)
+
+  def ahead_job(self, state):
+    params = to_host(self._params(state))
+    return lambda: self._run.compile_for(params, self._scene)
 
 
 def means(fig: dict) -> dict[str, float]:
@@ -45,7 +51,11 @@ class GroupProbe(AllRuns):
   def __init__(self, t, trials: int = EVAL_TRIALS, configs: list | None = None):
     """configs: each run's task config where the runs' tasks differ (each probed on its own task's
     probe scene: train.evaluation.group_trial_runner)."""
-    params = t.learner.policy_params
-    run = group_trial_runner(t.plan.cfg, t.plan.cfg.scene.probe_scene, act_from_params(t.spec), trials,
-                             EVAL_EPS, EVAL_SEED, configs)
+    self._params = params = t.learner.policy_params
+    self._run = run = group_trial_runner(t.plan.cfg, t.plan.cfg.scene.probe_scene, act_from_params(t.spec), trials,
+                                         EVAL_EPS, EVAL_SEED, configs)
     super().__init__(lambda states: [means(fig) for fig in run(to_host(params(states)))])
+
+  def ahead_job(self, states):
+    params = to_host(self._params(states))
+    return lambda: self._run.compile_for(params)

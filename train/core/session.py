@@ -10,6 +10,7 @@ from typing import Any
 
 import jax
 
+from train.core import ahead
 from train.core.build import Training, build, compile_update, init_state, make_evaluator
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
 from train.evaluation import milestone_folder
@@ -24,6 +25,7 @@ from train.core.progress import Reporter
 class SessionOptions:
   checkpoint_every_s: float = CHECKPOINT_EVERY_S
   keep_checkpoints: int = KEEP
+  compile_ahead: str = "auto"  # the evaluations' programs compiled beside the training step's: train.core.ahead
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,24 +59,41 @@ def _restore(t: Training, ckpts: RunCheckpoints) -> tuple[Any, int]:
   return from_host(host, t.shardings), int(meta["step"])  # below the total: plan_run checked the newest
 
 
-def evaluator_of(t: Training, seed: int | None = None):
+class BraxEvaluation(ahead.CompiledAhead):
+  """evaluate(state) -> Brax's evaluation metrics (acting.Evaluator.run_evaluation) of the state's policy."""
+
+  def __init__(self, t: Training, evaluator):
+    self._params, self._evaluator = t.learner.policy_params, evaluator
+
+  def __call__(self, state) -> dict:
+    self.ready()
+    return self._evaluator.run_evaluation(to_host(self._params(state)), training_metrics={})
+
+  def ahead_job(self, state):
+    ev, params = self._evaluator, to_host(self._params(state))
+    unroll_key = jax.random.split(ev._key)[1]  # noqa: SLF001  (as run_evaluation splits it)
+    return lambda: ahead.brax_unroll(ev).lower(ev._eval_state_to_donate, params, unroll_key).compile()  # noqa: SLF001
+
+
+def evaluator_of(t: Training, seed: int | None = None) -> BraxEvaluation | None:
   """evaluate(state) -> Brax evaluation metrics of a run of seed `seed` (default: the plan's), or None."""
   ev = make_evaluator(t, t.plan.seed if seed is None else seed)
-  if ev is None:
-    return None
-  return lambda state: ev.run_evaluation(to_host(t.learner.policy_params(state)), training_metrics={})
+  return None if ev is None else BraxEvaluation(t, ev)
 
 
-def _loop(t: Training, db, stop, checkpointer: Checkpointer, start_step: int) -> tuple[Loop, Reporter]:
-  plan, p = t.plan, t.plan.preset
+def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: int,
+          options: SessionOptions) -> tuple[Loop, Reporter]:
+  plan = t.plan
+  evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
+  if ahead.wanted(options.compile_ahead):
+    ahead.start((evaluate, probe), state)  # compiling beside the update's compilation
   update = compile_update(t)
   primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
   reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,
                       os.path.join(plan.out_dir, "tb") if primary else None,
                       stream=sys.stdout if primary else open(os.devnull, "w"),
                       wall_offset=db.wall_offset(plan.run_id, start_step))
-  schedule = schedule_of(t, evaluator_of(t), Probe(t) if plan.probe_every else None)
-  loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, stop, schedule)
+  loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, stop, schedule_of(t, evaluate, probe))
   return loop, reporter
 
 
@@ -119,7 +138,7 @@ def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions
   """Trains until the plan's total steps, an early stop or a stop request; returns the summary."""
   t, state, step = prepared.t, prepared.state, prepared.step
   checkpointer = checkpointer_of(t, db, options, last_step=step if t.plan.resume else None)
-  loop, reporter = _loop(t, db, stop, checkpointer, step)
+  loop, reporter = _loop(t, db, stop, checkpointer, state, step, options)
   try:
     return finish_run(t, loop.run(state, step, t.plan.total_steps), checkpointer, reporter)
   finally:

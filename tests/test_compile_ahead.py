@@ -1,0 +1,110 @@
+"""The in-training evaluations' programs compiled ahead, in threads beside the training step's
+(train.core.ahead, `train.run --compile-ahead`): the first evaluation or probe after it compiles
+nothing large and reports what it reports without it."""
+
+import dataclasses
+import threading
+
+import jax
+import jax.numpy as jnp
+import pytest
+
+from helpers import TINY
+from train.core import ahead
+from train.core.build import build
+from train.core.group_evaluator import GroupEvaluator
+from train.core.group_loop import run_slice
+from train.core.plan import plan_run
+from train.core.probe import GroupProbe, Probe
+from train.core.session import evaluator_of
+from train.run import parser
+
+SEEDS = [0, 3]
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+  """(t, states): a tiny SAC run with Brax's evaluator (4 episodes) and two runs' fresh states."""
+  plan = plan_run(parser().parse_args(["--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", *TINY,
+                                       "--out", str(tmp_path_factory.mktemp("ahead") / "run")]))
+  t = build(dataclasses.replace(plan, preset=dataclasses.replace(plan.preset, num_evals=2, num_eval_envs=4)))
+  return t, jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in SEEDS]))
+
+
+class Compiles:
+  """While open, in the main thread: the seconds of each XLA compilation and the number of programs
+  loaded from the persistent compilation cache instead (JAX's monitoring events)."""
+
+  def __enter__(self):
+    self.seconds, self.cache_hits, self._on = [], 0, True
+
+    def compiled(event: str, seconds: float, **_):
+      if self._on and event == "/jax/core/compile/backend_compile_duration" and _main():
+        self.seconds.append(seconds)
+
+    def loaded(event: str, **_):
+      if self._on and event == "/jax/compilation_cache/cache_hits" and _main():
+        self.cache_hits += 1
+    jax.monitoring.register_event_duration_secs_listener(compiled)
+    jax.monitoring.register_event_listener(loaded)
+    return self
+
+  def __exit__(self, *exc):
+    self._on = False
+
+  def large(self) -> int:
+    """Programs compiled (over 0.5 s) or loaded from the cache (only those that took over 1 s to
+    compile are stored there: not the eager operations around an evaluation)."""
+    return sum(s > 0.5 for s in self.seconds) + self.cache_hits
+
+
+def _main() -> bool:
+  return threading.current_thread() is threading.main_thread()
+
+
+def _first_use_compiles_nothing_large_and_reports_the_same(make, use, example):
+  """use(make()) twice: once as it comes, once after compile_ahead(example) (a fresh object each
+  time, so the first compiles its programs itself or loads them from the persistent cache): the
+  same report, and the second's first use neither compiles nor loads a large program."""
+  with Compiles() as cold:
+    want = use(make())
+  computation = make()
+  computation.compile_ahead(example)
+  with Compiles() as warm:
+    got = use(computation)
+  assert cold.large() >= 1 and warm.large() == 0, (cold.seconds, cold.cache_hits, warm.seconds, warm.cache_hits)
+  return want, got
+
+
+def test_brax_s_evaluator_and_a_programs_evaluation_compiled_ahead(tiny):
+  t, states = tiny
+  one = run_slice(states, 0)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: evaluator_of(t), lambda e: e(one), one)
+  figures = [k for k in want if k.startswith("eval/episode_")]
+  assert len(figures) > 10 and all(got[k] == want[k] for k in figures)
+
+  def evaluate(group):
+    group.at(states, 0)
+    return group.result(1)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupEvaluator(t, SEEDS), evaluate, states)
+  assert all(got[k] == want[k] for k in figures)
+
+
+def test_the_probe_and_a_programs_probe_compiled_ahead(tiny):
+  t, states = tiny
+  one = run_slice(states, 0)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: Probe(t, trials=4), lambda p: p(one), one)
+  assert want == got and 0.0 <= want["probe/progress_mean"] <= 1.0
+
+  def probe(group):
+    group.at(states, 0)
+    return group.result(1)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, trials=4), probe, states)
+  assert want == got
+
+
+def test_compile_ahead_is_on_where_the_backend_is_not_the_cpu_unless_asked():
+  assert not ahead.wanted("off") and ahead.wanted("on")
+  assert ahead.wanted("auto") == (jax.default_backend() != "cpu")
+  with pytest.raises(ValueError, match="--compile-ahead takes one of auto, on, off"):
+    ahead.wanted("yes")

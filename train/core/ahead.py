@@ -1,0 +1,79 @@
+"""Programs compiled ahead of their first use: a run's in-training evaluations (Brax's evaluator,
+the probe) compile in threads of their own while the main thread compiles the training step.
+
+XLA compiles without Python's lock and with threads of its own, so on a GPU host's cores the
+compilations overlap. The first evaluation then finds its program compiled: JAX's caches serve a
+call with the program that `jit(f).lower(args).compile()` made for arguments of the same shapes,
+dtypes and placement. On one H100 the PPO run's training step compiles in 30-42 s, Brax's
+evaluator in ~24 s and the probe in ~16 s, one after the other (docs/benchmarks.md, "Compilation
+under XLA flags"). A program's first evaluation and probe cost its 40 SAC runs 46 s and 32 s on an
+H200 (results/speed/group/paper-packed-2-H200-2026-11-28.md).
+
+`auto` (train.run --compile-ahead) turns it on where JAX's backend is not the CPU. On a CPU the
+compilers share the cores the run itself uses, and a short run may end before its first
+evaluation, which would then have been compiled for nothing."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+CHOICES = ("auto", "on", "off")  # train.run --compile-ahead
+
+
+def wanted(choice: str) -> bool:
+  """Whether `--compile-ahead choice` compiles ahead here (never in a run of several processes,
+  jax.distributed, whose programs every process compiles in step)."""
+  import jax  # noqa: PLC0415  (train.run reads CHOICES before JAX starts)
+  if choice not in CHOICES:
+    raise ValueError(f"--compile-ahead takes one of {', '.join(CHOICES)}, got {choice!r}")
+  if jax.process_count() > 1:
+    return False
+  return choice == "on" or (choice == "auto" and jax.default_backend() != "cpu")
+
+
+class CompiledAhead:
+  """A computation whose programs may compile in a thread before its first use:
+  `compile_ahead(example)` takes what it needs from `example` (a state like the ones it will be
+  given) in the caller's thread, then compiles in a thread of its own; `ready()`, called before
+  each use, waits for that thread. A failure there is dropped: the first use compiles again and
+  raises where it is used."""
+
+  _ahead: threading.Thread | None = None
+
+  def ahead_job(self, example) -> Callable[[], Any]:
+    """A call that compiles this computation's programs for states like `example` (the arguments
+    made now, so that no state is read after the caller goes on, e.g. donates it)."""
+    raise NotImplementedError
+
+  def compile_ahead(self, example) -> None:
+    job = self.ahead_job(example)
+    self._ahead = threading.Thread(target=_quietly, args=(job,), name=f"compile-ahead-{type(self).__name__}",
+                                   daemon=True)
+    self._ahead.start()
+
+  def ready(self) -> None:
+    if self._ahead is not None:
+      self._ahead.join()
+      self._ahead = None
+
+
+def _quietly(job: Callable[[], Any]) -> None:
+  try:
+    job()
+  except Exception:  # noqa: BLE001  (the first use compiles again and raises there)
+    pass
+
+
+def start(computations, example) -> None:
+  """compile_ahead(example) for each computation that can (None and others are skipped)."""
+  for c in computations:
+    if isinstance(c, CompiledAhead):
+      c.compile_ahead(example)
+
+
+def brax_unroll(evaluator):
+  """The jitted unroll of Brax's `acting.Evaluator` (its private `_generate_eval_unroll`, brax
+  0.14): what `run_evaluation(params, ...)` calls with (params, unroll key). The one place this
+  project reads it (tests/test_compile_ahead.py fails where an upgrade changes it)."""
+  return evaluator._generate_eval_unroll  # noqa: SLF001
