@@ -78,7 +78,8 @@ def _session_folder(tmp_path_factory) -> "pathlib.Path":
 @pytest.fixture(scope="session")
 def ppo_run(tmp_path_factory):
   """The session's one tiny PPO run (2,048 steps, a checkpoint after every 512-step update, a
-  milestone at 1,024, the hardest probe at the end, one held-out staircase): made once by whichever
+  milestone at 1,024, the hardest probe at the end, compiled ahead beside the update (as on a GPU:
+  train.core.ahead), one held-out staircase): made once by whichever
   worker asks first, under a file lock, and read by the test files of every worker. Tests copy it
   before changing it. Returns (run directory, database)."""
   import contextlib
@@ -97,7 +98,7 @@ def ppo_run(tmp_path_factory):
       with contextlib.redirect_stdout(io.StringIO()) as printed:
         rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", str(out),
                        "--db", str(database), "--probe-every", "2048", "--milestones", "1024",
-                       "--checkpoint-every", "0", "--keep-checkpoints", "4", *TINY, "--set",
+                       "--checkpoint-every", "0", "--keep-checkpoints", "4", "--compile-ahead", "on", *TINY, "--set",
                        f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"])
       if rc != 0:
         (root / "failed").write_text(printed.getvalue())

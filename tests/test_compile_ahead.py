@@ -1,6 +1,7 @@
 """The in-training evaluations' programs compiled ahead, in threads beside the training step's
 (train.core.ahead, `train.run --compile-ahead`): the first evaluation or probe after it compiles
-nothing large and reports what it reports without it."""
+nothing large and reports what it reports without it. (The runs of tests/conftest.py's ppo_run and
+tests/test_group.py's program train with it on.)"""
 
 import dataclasses
 import threading
@@ -10,6 +11,7 @@ import jax.numpy as jnp
 import pytest
 
 from helpers import TINY
+from train import evaluation
 from train.core import ahead
 from train.core.build import build
 from train.core.group_evaluator import GroupEvaluator
@@ -100,6 +102,10 @@ def test_the_probe_and_a_programs_probe_compiled_ahead(tiny):
     group.at(states, 0)
     return group.result(1)
   want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, trials=4), probe, states)
+  assert want == got
+  with pytest.MonkeyPatch.context() as mp:  # the runs' trials vmapped in one program, as on a GPU
+    mp.setattr(evaluation, "vmapped_trials", lambda: True)
+    want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, trials=4), probe, states)
   assert want == got
 
 

@@ -111,7 +111,7 @@ def test_a_stop_request_ends_every_run_of_the_program():
 def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
   out, database = str(tmp_path / "group"), str(tmp_path / "db.sqlite")
   assert run.main([*TRAIN_TINY, "--seeds", "0,1", "--steps", "1024", "--out", out, "--db", database,
-                   "--probe-every", "512", "--checkpoint-every", "0"]) == 0
+                   "--probe-every", "512", "--checkpoint-every", "0", "--compile-ahead", "on"]) == 0
   said = capsys.readouterr().out
   assert "2 runs" in said and "in one program" in said and "s0 [train]" in said and "s1 [probe]" in said
   d = dbmod.ExperimentDB(database)

@@ -18,8 +18,9 @@ the trials are samples. `--baseline NAME --task TASK [RUN_DIR]` evaluates a base
 (mjx_tracks.baselines: zero, full, random, scripted) the same way, recorded as a run of algorithm
 `baseline` (default folder runs/baselines/TASK-NAME). `RUN_DIR RUN_DIR ...` evaluates several runs
 in one process, the runs of one network whose tasks one program can take as data (a study's pack:
-`train.run --seeds` / `--tasks`) in one vmapped rollout per scene program, every run's reports and
-trial rows its own (the same trials as alone; floats within the vmap's rounding).
+`train.run --seeds` / `--tasks`) in one vmapped rollout per scene program (on the CPU one policy
+after another), every run's reports and trial rows its own (the same trials as alone; floats
+within the vmap's rounding).
 """
 
 from __future__ import annotations
@@ -179,9 +180,10 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
   run = runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
                None if all(c == cfgs[0] for c in own) else own)
   for scene in scenes:
+    how = "in one program" if runner is pack_trial_runner else "one after another (on the CPU)"
     print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
-          f"for {len(slots)} policies of {len(runs)} runs in one program (compiling it first where no scene "
-          "before it shares it) ...", file=sys.stderr, flush=True)
+          f"for {len(slots)} policies of {len(runs)} runs {how}, compiling first where no scene before it "
+          "shares its program ...", file=sys.stderr, flush=True)
     for (i, budget), (_, _, step), per_trial in zip(slots, loaded, run(params, scene)):
       folder, meta = runs[i]
       out = _write_report(args, folder, meta, scene, budget, step, per_trial)
@@ -343,7 +345,10 @@ def _several(args):
     fits = (g for g in groups if packing_conflict(cfg, cfgs[g[0]]) is None and jobs[i][0] == jobs[g[0]][0]
             and _network(runs[i][0]) == _network(runs[g[0]][0]))
     group = next(fits, None)
-    groups.append([i]) if group is None else group.append(i)
+    if group is None:
+      groups.append([i])
+    else:
+      group.append(i)
   for g in groups:
     if jobs[g[0]][0]:
       yield from _evaluate_several(args, jobs[g[0]][0], [cfgs[i] for i in g], [runs[i] for i in g],

@@ -72,8 +72,13 @@ def start(computations, example) -> None:
       c.compile_ahead(example)
 
 
-def brax_unroll(evaluator):
-  """The jitted unroll of Brax's `acting.Evaluator` (its private `_generate_eval_unroll`, brax
-  0.14): what `run_evaluation(params, ...)` calls with (params, unroll key). The one place this
-  project reads it (tests/test_compile_ahead.py fails where an upgrade changes it)."""
-  return evaluator._generate_eval_unroll  # noqa: SLF001
+def brax_evaluation_job(evaluator, params) -> Callable[[], Any]:
+  """A call that compiles the unroll of Brax's `acting.Evaluator` for params like these, with the
+  arguments its `run_evaluation` gives it next: the episodes' state it donates, the params and the
+  key it splits off. Those are private attributes (brax 0.14: `_generate_eval_unroll`,
+  `_eval_state_to_donate`, `_key`), read here only; tests/test_compile_ahead.py fails where an
+  upgrade changes them."""
+  import jax  # noqa: PLC0415
+  unroll, episodes = evaluator._generate_eval_unroll, evaluator._eval_state_to_donate  # noqa: SLF001
+  unroll_key = jax.random.split(evaluator._key)[1]  # noqa: SLF001  (as run_evaluation splits it)
+  return lambda: unroll.lower(episodes, params, unroll_key).compile()

@@ -3,8 +3,9 @@ terrain; random areas for navigation): the very trials of `python -m train.evalu
 SCENE` (the same compiled program: same reset keys, deterministic policy), compiled
 once and run between updates on the current parameters, so an early stop on its success is the
 final evaluation's (and the evaluation finds the program in the persistent compilation cache).
-GroupProbe, for the runs of one program, runs the same trials vmapped over the runs' policies: the
-same trials in another program, which may round a trial's physics differently."""
+GroupProbe, for the runs of one program, runs the same trials vmapped over the runs' policies (on
+the CPU one policy after another: train.evaluation.vmapped_trials): the same trials in another
+program, which may round a trial's physics differently."""
 
 from __future__ import annotations
 

@@ -70,9 +70,7 @@ class BraxEvaluation(ahead.CompiledAhead):
     return self._evaluator.run_evaluation(to_host(self._params(state)), training_metrics={})
 
   def ahead_job(self, state):
-    ev, params = self._evaluator, to_host(self._params(state))
-    unroll_key = jax.random.split(ev._key)[1]  # noqa: SLF001  (as run_evaluation splits it)
-    return lambda: ahead.brax_unroll(ev).lower(ev._eval_state_to_donate, params, unroll_key).compile()  # noqa: SLF001
+    return ahead.brax_evaluation_job(self._evaluator, to_host(self._params(state)))
 
 
 def evaluator_of(t: Training, seed: int | None = None) -> BraxEvaluation | None:
