@@ -5,7 +5,8 @@
 # machine stays warm; every call then waits WAIT seconds (or until the study ends), packing the
 # study folder (without checkpoints), its log and the logs of the attempts still running (a pack of
 # seeds: its training and evaluation logs, and its ended runs' exported policies and records) into
-# $OUT/$STUDY-study.tgz every 30 s and at the end. Afterwards, anywhere:
+# $OUT/$STUDY-study.tgz.00, .01, ... (parts of 15 MiB: `cat` them together) every 30 s and at the
+# end. Afterwards, anywhere:
 # `python -m train.study report $STUDY --root DIR`.
 # FROM=FOLDER starts from a study folder that came back earlier (e.g. results/studies/paper):
 # its finished runs are skipped. Without FROM, a study folder committed at results/studies/$STUDY
@@ -61,9 +62,12 @@ pack() {
   cp "$log" "$root/$study/study.log" 2>/dev/null
   # a pack's runs stay in /tmp/study-pack-* until its evaluations end: their exported policies and
   # records come back too, so a machine that goes back mid-evaluation loses no trained policy
-  (cd /tmp && tar czf "$OUT/$study-study.tgz.tmp" --exclude=checkpoints "studies/$study" study-cell-*/attempt.log \
-     study-pack-*/*.log study-pack-*/pack/*/policy study-pack-*/pack/*/*.json 2>/dev/null)
-  mv "$OUT/$study-study.tgz.tmp" "$OUT/$study-study.tgz"
+  # in parts of at most 15 MiB ($OUT gives back 8 files of at most 16 MiB: a finished 60-run study's
+  # folder, without checkpoints, is ~20 MB): join them with `cat STUDY-study.tgz.* > STUDY-study.tgz`
+  (cd /tmp && tar czf "$root/$study-study.tgz" --exclude=checkpoints --exclude=tb "studies/$study" \
+     study-cell-*/attempt.log study-pack-*/*.log study-pack-*/pack/*/policy study-pack-*/pack/*/*.json 2>/dev/null)
+  rm -f "$OUT/$study-study.tgz".*
+  split -b 15M -d -a 2 "$root/$study-study.tgz" "$OUT/$study-study.tgz."
 }
 
 if running; then echo "the study is running (pid $(cat "$pidfile")); waiting ${WAIT:-560} s"; else start; fi
