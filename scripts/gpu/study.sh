@@ -66,8 +66,9 @@ pack() {
   # folder, without checkpoints, is ~20 MB): join them with `cat STUDY-study.tgz.* > STUDY-study.tgz`
   (cd /tmp && tar czf "$root/$study-study.tgz" --exclude=checkpoints --exclude=tb "studies/$study" \
      study-cell-*/attempt.log study-pack-*/*.log study-pack-*/pack/*/policy study-pack-*/pack/*/*.json 2>/dev/null)
-  rm -f "$OUT/$study-study.tgz".*
-  split -b 15M -d -a 2 "$root/$study-study.tgz" "$OUT/$study-study.tgz."
+  rm -rf "$root/parts" && mkdir "$root/parts" && split -b 15M -d -a 2 "$root/$study-study.tgz" "$root/parts/$study-study.tgz."
+  [ "$(ls "$root/parts" | wc -l)" -le 8 ] || echo "warning: $(ls "$root/parts" | wc -l) parts: \$OUT gives back 8 files" >&2
+  rm -f "$OUT/$study-study.tgz".* && mv "$root/parts/"* "$OUT/"  # the parts replaced at once (a call cut midway keeps a whole set)
 }
 
 if running; then echo "the study is running (pid $(cat "$pidfile")); waiting ${WAIT:-560} s"; else start; fi

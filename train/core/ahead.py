@@ -72,6 +72,14 @@ def start(computations, example) -> None:
       c.compile_ahead(example)
 
 
+def settle(computations) -> None:
+  """Waits for the compilations ahead still running (a run that ended before its first evaluation):
+  a thread left inside XLA's compiler when the interpreter exits can abort the process."""
+  for c in computations:
+    if isinstance(c, CompiledAhead):
+      c.ready()
+
+
 def brax_evaluation_job(evaluator, params) -> Callable[[], Any]:
   """A call that compiles the unroll of Brax's `acting.Evaluator` for params like these, with the
   arguments its `run_evaluation` gives it next: the episodes' state it donates, the params and the

@@ -206,5 +206,6 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
                      after_update).run(states, 0, plans[0].total_steps)
   finally:
+    ahead.settle(shared)
     for _, reporter in parts:
       reporter.close()

@@ -140,6 +140,7 @@ def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions
   try:
     return finish_run(t, loop.run(state, step, t.plan.total_steps), checkpointer, reporter)
   finally:
+    ahead.settle(f for f, _ in loop.schedule.evaluations)
     reporter.close()
 
 
