@@ -164,12 +164,12 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
   tasks as data; each run's reports and trial rows its own (the database beside its folder), each
   as `train.evaluate RUN` of the run alone writes them (the same trials: floats within the vmap's
   rounding)."""
-  from train import evaluate
+  from train import evaluate, evaluation
   from train.db import ExperimentDB, default_path
   from train.evaluation import report_path, suite_scenes
   # on the CPU one policy after another (vmapped_trials); here vmapped, as on a GPU
   with pytest.MonkeyPatch.context() as mp:
-    mp.setattr(evaluate, "vmapped_trials", lambda: True)
+    mp.setattr(evaluation, "vmapped_trials", lambda: True)
     assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
   scenes = suite_scenes(load_config(ASC))
   assert len(scenes) >= 4 and scenes == suite_scenes(load_config(DES))

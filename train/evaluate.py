@@ -39,9 +39,9 @@ from mjx_tracks.limits import MAX_SEED, MAX_TRIALS
 from mjx_tracks.metrics import EPISODE, trial_row
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.evaluation import (EVAL_EPS, EVAL_SEED, EVAL_TRIALS, SCENES, fewer_trials_path, milestone_folder,
-                              ROBUST, pack_trial_runner, policy_by_policy_runner, report_path, robustness_bases,
+                              ROBUST, policies_runner, report_path, robustness_bases,
                               robustness_runner, robustness_scenes, saved_milestones, scene_config, suite_scenes,
-                              trial_runner, trials_in, vmapped_trials)
+                              trial_runner, trials_in)
 from train.core.run_record import read_run_record, run_id_in, write_run_record
 
 BASELINE_ROOT = os.path.join("runs", "baselines")  # where --baseline runs go unless RUN_DIR is given
@@ -176,11 +176,11 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
   loaded = [_policy(runs[i][0], None, b) for i, b in slots]  # (make_act, params, step): one network (_several)
   params = jax.tree_util.tree_map(lambda *x: np.stack(x), *[p for _, p, _ in loaded])
   own = [cfgs[i] for i, _ in slots]
-  runner = pack_trial_runner if vmapped_trials() else policy_by_policy_runner
-  run = runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
-               None if all(c == cfgs[0] for c in own) else own)
+  run = policies_runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
+                        None if all(c == cfgs[0] for c in own) else own)
+  from train import evaluation  # noqa: PLC0415  (its vmapped_trials, as policies_runner reads it)
+  how = "in one program" if evaluation.vmapped_trials() else "one after another (on the CPU)"
   for scene in scenes:
-    how = "in one program" if runner is pack_trial_runner else "one after another (on the CPU)"
     print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
           f"for {len(slots)} policies of {len(runs)} runs {how}, compiling first where no scene before it "
           "shares its program ...", file=sys.stderr, flush=True)
@@ -340,10 +340,11 @@ def _several(args):
   runs = [(d, read_run_record(d)) for d in dict.fromkeys(args.run_dirs)]
   cfgs = [recorded_config(meta["config"], args.set) for _, meta in runs]
   jobs = [_jobs(args, cfg, d) for cfg, (d, _) in zip(cfgs, runs)]
+  networks = [_network(d) for d, _ in runs]
   groups: list[list[int]] = []
   for i, cfg in enumerate(cfgs):
     fits = (g for g in groups if packing_conflict(cfg, cfgs[g[0]]) is None and jobs[i][0] == jobs[g[0]][0]
-            and _network(runs[i][0]) == _network(runs[g[0]][0]))
+            and networks[i] == networks[g[0]])
     group = next(fits, None)
     if group is None:
       groups.append([i])

@@ -245,8 +245,7 @@ def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps:
   """run(params with a leading run axis) -> [per-trial figures of each run]: pack_trial_runner on
   one scene (the runs of one `train.run --seeds` program probed at once; on the CPU
   policy_by_policy_runner: vmapped_trials)."""
-  run = (pack_trial_runner if vmapped_trials() else policy_by_policy_runner)(cfg0, [scene], make_act, trials, eps,
-                                                                             seed, configs)
+  run = policies_runner(cfg0, [scene], make_act, trials, eps, seed, configs)
 
   def one(params):
     return run(params, scene)
@@ -298,6 +297,14 @@ def pack_trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int
 
   run.compile_for = compile_for
   return run
+
+
+def policies_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps: float, seed: int,
+                    configs: list[TaskConfig] | None = None):
+  """run(params with a leading policy axis, scene) -> [per-trial figures of each policy]:
+  pack_trial_runner's, or on the CPU policy_by_policy_runner's (vmapped_trials)."""
+  runner = pack_trial_runner if vmapped_trials() else policy_by_policy_runner
+  return runner(cfg0, scenes, make_act, trials, eps, seed, configs)
 
 
 def vmapped_trials() -> bool:
