@@ -1,5 +1,6 @@
-"""A study on a local Dask cluster of 2 worker processes, each with its own scratch folder (no
-shared filesystem), with a stand-in for train.run (tests/fake_study_run.py): a crashed run is
+"""A study on a local Dask cluster of 2 worker processes, each with its own scratch folder (the first
+test: no shared filesystem, run folders come back as tars; the others: moved into the study's
+folder), with a stand-in for train.run (tests/fake_study_run.py): a crashed run is
 retried from the checkpoint that came back, a run whose worker is killed is retried, every
 attempt is recorded, and a study started again runs nothing finished."""
 
@@ -65,8 +66,10 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
     killer = threading.Thread(target=_kill_the_worker_running, args=(client, f"{SLOW}/attempt-1"))
     killer.start()
     stream = io.StringIO()
-    counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=stream, progress_every=0.5).run()
+    counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=stream, progress_every=0.5,
+                         move_folders=False).run()  # as from workers on other machines: tars
     killer.join()
+    assert not os.path.exists(os.path.join(folder, ".handoff"))
     assert counts == {"done": 6, "running": 0, "queued": 0, "failed": 0}  # 4 trained runs, 2 baseline evaluations
     state = json.load(open(os.path.join(folder, "state.json")))["cells"]
     slow = state[SLOW]["attempts"]
@@ -164,7 +167,8 @@ def test_a_run_whose_evaluation_failed_is_evaluated_again_even_after_a_stopped_a
       {"started": 1.0, "ended": 2.0, "rc": 2, "phase": "evaluate"},
       {"started": 3.0, "ended": None, "rc": None, "phase": None, "stopped": True}]
   runner._submit(cid)
-  _, _, resume, train, _ = runner.client.calls[-1]
+  _, _, resume, train, _, handoff = runner.client.calls[-1]
+  assert handoff.shared()  # a worker here moves the folder into the study's
   assert resume is not None and train is False
   runner.state.cells[cid]["attempts"][0]["phase"] = "train"  # training itself failed: train again
   runner._submit(cid)
@@ -274,6 +278,7 @@ def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_ow
   starts = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["started"] for t in spec.tasks)
   ends = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["ended"] for t in spec.tasks)
   assert starts[1] < ends[0]  # the two packs ran at once
+  assert os.listdir(os.path.join(folder, ".handoff")) == ["token"]  # every folder moved in was taken
 
 
 def test_a_pack_of_tasks_and_groups_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):

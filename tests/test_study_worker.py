@@ -1,6 +1,8 @@
 """A pack's evaluations (train.study.worker): every run that ended in one process, its trials in
-the pack's database; each run gets the process's exit code and output."""
+the pack's database; each run gets the process's exit code and output. A run folder comes back
+moved where the worker shares the study's filesystem, else as a tar."""
 
+import dataclasses
 import os
 
 from train.study import worker
@@ -28,3 +30,36 @@ def test_a_packs_runs_are_evaluated_in_one_process_and_each_keeps_its_exit_code_
   folders["bad"] = str(tmp_path / "bad")
   os.makedirs(folders["bad"])
   assert {code for _, code, _ in worker._evaluate_together(folders, ["--suite"], (str(script),), "x", str(tmp_path)).values()} == {3}
+
+
+def _files(folder) -> list[str]:
+  return sorted(os.path.relpath(os.path.join(d, f), folder) for d, _, fs in os.walk(folder) for f in fs)
+
+
+def test_a_worker_sharing_the_studys_filesystem_moves_the_run_folder_and_one_elsewhere_sends_a_tar(tmp_path):
+  handoff = worker.Handoff.create(str(tmp_path / "study"))
+
+  def run_folder(name: str) -> str:
+    folder = tmp_path / name
+    (folder / "checkpoints" / "8").mkdir(parents=True)
+    (folder / "checkpoints" / "8" / "state.bin").write_bytes(os.urandom(4096))
+    (folder / "run.json").write_text("{}")
+    return str(folder)
+
+  moved = worker._outcome(run_folder("a"), 0, "evaluate", "its output", handoff)
+  assert moved["tar"] is None and os.path.dirname(moved["moved"]) == handoff.folder
+  assert not os.path.exists(tmp_path / "a")
+  elsewhere = dataclasses.replace(handoff, folder=str(tmp_path / "not-here"))  # another machine: no such folder
+  sent = worker._outcome(run_folder("b"), 0, "evaluate", "its output", elsewhere)
+  assert "moved" not in sent and sent["tar"] and os.path.isdir(tmp_path / "b")
+  for res, name in ((moved, "got-a"), (sent, "got-b")):
+    got = tmp_path / name
+    got.mkdir()
+    (got / "stale").write_text("an earlier attempt's")  # replaced by what came back
+    assert worker.receive(res, str(got))
+    assert _files(got) == ["checkpoints/8/state.bin", "run.json", "study-attempts.log"]
+    assert (got / "study-attempts.log").read_text() == "its output"
+  assert os.listdir(handoff.folder) == [worker.Handoff.TOKEN]  # taken: nothing left behind
+  assert not worker.receive({**sent, "tar": None}, str(tmp_path / "nothing"))
+  again = worker.Handoff.create(str(tmp_path / "study"))  # the study started again: the old token is stale
+  assert again.shared() and not handoff.shared()

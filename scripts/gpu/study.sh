@@ -64,7 +64,7 @@ pack() {
   # records come back too, so a machine that goes back mid-evaluation loses no trained policy
   # in parts of at most 15 MiB ($OUT gives back 8 files of at most 16 MiB: a finished 60-run study's
   # folder, without checkpoints, is ~20 MB): join them with `cat STUDY-study.tgz.* > STUDY-study.tgz`
-  (cd /tmp && tar czf "$root/$study-study.tgz" --exclude=checkpoints --exclude=tb "studies/$study" \
+  (cd /tmp && tar czf "$root/$study-study.tgz" --exclude=checkpoints --exclude=tb --exclude=.handoff "studies/$study" \
      study-cell-*/attempt.log study-pack-*/*.log study-pack-*/pack/*/policy study-pack-*/pack/*/*.json 2>/dev/null)
   rm -rf "$root/parts" && mkdir "$root/parts" && split -b 15M -d -a 2 "$root/$study-study.tgz" "$root/parts/$study-study.tgz."
   [ "$(ls "$root/parts" | wc -l)" -le 8 ] || echo "warning: $(ls "$root/parts" | wc -l) parts: \$OUT gives back 8 files" >&2

@@ -1,5 +1,6 @@
 """Running a study on a Dask cluster: every unfinished cell is submitted as one task
-(`train.study.worker.run_cell`); run folders come back as tars into STUDY/runs/ and their records
+(`train.study.worker.run_cell`); run folders come back into STUDY/runs/ (moved there by a worker
+that shares the study's filesystem, else as tars: train.study.worker.Handoff) and their records
 into STUDY/study.sqlite; failed attempts are retried from the last run folder that came back, up
 to the study's `retries`; every cell's state and attempts live in STUDY/state.json, so a study
 started again skips finished cells."""
@@ -20,7 +21,7 @@ from train.db import ExperimentDB
 from train.core.plan import DEFAULT_LIBRARY
 from train.core.run_record import read_run_record, run_id_in
 from train.study.spec import Cell, StudySpec, cells, pack_folders, pack_train_args, packs_of
-from train.study.worker import EVALUATE, RUN_DB, TRAIN, pack, run_cell, run_pack, unpack
+from train.study.worker import EVALUATE, RUN_DB, TRAIN, Handoff, pack, receive, run_cell, run_pack
 
 STUDY_DB = "study.sqlite"  # every run's records, merged from the run folders that come back
 STATE = "state.json"  # every cell's status and attempts
@@ -138,10 +139,11 @@ class StudyRunner:
 
   def __init__(self, spec: StudySpec, folder: str, client, commands=(TRAIN, EVALUATE), stream=sys.stdout,
                backends: tuple[str, ...] = ("gpu", "cpu"), progress_every: float = 60.0,
-               mirror_db: str | None = None):
+               mirror_db: str | None = None, move_folders: bool = True):
     """backends: the worker kinds the cluster has; a cell whose backend is missing runs on the other;
     progress_every: seconds between progress lines while no run finishes; mirror_db: another
-    database that gets every run's records too (the server's)."""
+    database that gets every run's records too (the server's); move_folders: workers that share the
+    study's filesystem move run folders into it (False: every folder comes back as a tar)."""
     self.progress_every, self.mirror_db = progress_every, mirror_db
     self.cancel = threading.Event()  # set from another thread: the study's tasks are cancelled, run() returns
     self.spec, self.folder, self.client, self.commands, self.stream = spec, folder, client, commands, stream
@@ -150,6 +152,7 @@ class StudyRunner:
     self.submitted: list = []  # every attempt's future, in order
     self.owners: dict[str, list[str]] = {}  # an attempt's key -> the cells it runs (several: a pack)
     os.makedirs(os.path.join(folder, "runs"), exist_ok=True)
+    self.handoff = Handoff.create(folder) if move_folders else None
     from train.study.results import write_spec  # noqa: PLC0415  (results imports this module)
     write_spec(folder, spec)
     self.state = StudyState.load(folder, list(self.cells))
@@ -173,7 +176,7 @@ class StudyRunner:
     resume, train = self._begin(cid)
     key = f"{cid}/attempt-{len(self.state.cells[cid]['attempts'])}"
     future = self.client.submit(run_cell, cell.train_args(), cell.eval_args(self.spec.eval_trials), resume, train,
-                                self.commands, key=key, pure=False, resources=self._resources(cell))
+                                self.commands, self.handoff, key=key, pure=False, resources=self._resources(cell))
     self.owners[key] = [cid]
     return future
 
@@ -187,7 +190,7 @@ class StudyRunner:
       self.state.cells[cid]["attempts"][-1]["pack"] = cids
     key = f"{cids[0]}/attempt-{len(self.state.cells[cids[0]]['attempts'])}+{len(cids) - 1}"
     future = self.client.submit(run_pack, pack_train_args(cells), pack_folders(cells),
-                                cells[0].eval_args(self.spec.eval_trials), self.commands,
+                                cells[0].eval_args(self.spec.eval_trials), self.commands, self.handoff,
                                 key=key, pure=False, resources=self._resources(cells[0]))
     self.owners[key] = cids
     return future
@@ -221,9 +224,7 @@ class StudyRunner:
     record = self.state.cells[cid]
     attempt = record["attempts"][-1]
     db, local = ExperimentDB(os.path.join(self.folder, STUDY_DB)), cell_folder(self.folder, self.cells[cid])
-    if res["tar"] is not None:
-      shutil.rmtree(local, ignore_errors=True)
-      unpack(res["tar"], local)
+    if receive(res, local):
       if os.path.exists(os.path.join(local, RUN_DB)):
         db.import_runs(os.path.join(local, RUN_DB), local)
         if self.mirror_db:

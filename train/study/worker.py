@@ -1,9 +1,11 @@
-"""What runs on a Dask worker: one attempt at a study cell, in a scratch folder of the worker's own
-(no shared filesystem): train (or resume from the run folder sent along), evaluate, and send the
-run folder back as a tar."""
+"""What runs on a Dask worker: one attempt at a study cell, in a scratch folder of the worker's own:
+train (or resume from the run folder sent along), evaluate, and send the run folder back: moved
+into the study's folder where the worker shares its filesystem (Handoff), else as a tar (another
+machine)."""
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import os
@@ -13,6 +15,7 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+import uuid
 
 from mjx_tracks import atomic
 from train.core.run_record import run_id_in
@@ -39,6 +42,58 @@ def unpack(data: bytes, folder: str) -> None:
   os.makedirs(folder, exist_ok=True)
   with tarfile.open(fileobj=io.BytesIO(data), mode="r:gz") as tar:
     tar.extractall(folder, filter="data")
+
+
+@dataclasses.dataclass(frozen=True)
+class Handoff:
+  """STUDY/.handoff, where a worker that shares the study's filesystem moves a run folder instead of
+  sending it back as a tar: no gzip, no copy through Dask, no whole pack of checkpoints in memory
+  (the paper study's 20 PPO runs, ~2 GB of checkpoints, took 55-63 s to come back as tars on one
+  host: results/speed/group/paper-packed-2-H200-2026-11-28b.md). A worker shares it where it
+  reads the study's token there; a worker on another machine does not, and sends tars."""
+  folder: str  # holds TOKEN and the folders moved in, each under a name of its own until the study takes it
+  token: str
+
+  TOKEN = "token"
+
+  @staticmethod
+  def create(study_folder: str) -> Handoff:
+    """A new STUDY/.handoff with a token of its own; what an earlier start left there is removed (no
+    attempt of that start settles now)."""
+    folder = os.path.join(study_folder, ".handoff")
+    shutil.rmtree(folder, ignore_errors=True)
+    os.makedirs(folder)
+    handoff = Handoff(folder, uuid.uuid4().hex)
+    with open(os.path.join(folder, Handoff.TOKEN), "w") as f:  # half written: a worker sends a tar
+      f.write(handoff.token)
+    return handoff
+
+  def shared(self) -> bool:
+    """Whether this process sees the study's folder (its token there)."""
+    try:
+      with open(os.path.join(self.folder, Handoff.TOKEN)) as f:
+        return f.read() == self.token
+    except OSError:
+      return False
+
+  def take(self, folder: str) -> str:
+    """Moves the folder into STUDY/.handoff; its new path (a rename where both are on one filesystem)."""
+    moved = os.path.join(self.folder, uuid.uuid4().hex)
+    shutil.move(folder, moved)
+    return moved
+
+
+def receive(res: dict, folder: str) -> bool:
+  """Puts an attempt's run folder (res: run_cell's result or a pack's cell's) at `folder`, replacing
+  what was there: moved from STUDY/.handoff, or unpacked from its tar; whether one came back."""
+  if not res.get("moved") and res.get("tar") is None:
+    return False
+  shutil.rmtree(folder, ignore_errors=True)
+  if res.get("moved"):
+    shutil.move(res["moved"], folder)
+  else:
+    unpack(res["tar"], folder)
+  return True
 
 
 def pid_file(out: str) -> str:
@@ -89,8 +144,9 @@ def _evaluate_argv(command: tuple[str, ...], run: str, eval_args: list[str], db:
 
 
 def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, train: bool = True,
-             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
-  """{"rc", "phase" (train | evaluate), "tar" (the run folder, or None), "log_tail", "worker"}."""
+             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE), handoff: Handoff | None = None) -> dict:
+  """{"rc", "phase" (train | evaluate), "tar" (the run folder, or None), "moved" (where the run folder
+  was moved instead, handoff shared), "log_tail", "worker"}."""
   scratch = tempfile.mkdtemp(prefix="study-cell-")
   out, log = os.path.join(scratch, "run"), os.path.join(scratch, "attempt.log")
   try:
@@ -98,13 +154,13 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
       unpack(resume, out)
     phase, rc = _train_then_evaluate(run_args, eval_args, out, os.path.join(out, RUN_DB), resume is not None,
                                      train, commands, log)
-    return _outcome(out, rc, phase, open(log).read() if os.path.exists(log) else "")
+    return _outcome(out, rc, phase, open(log).read() if os.path.exists(log) else "", handoff)
   finally:
     shutil.rmtree(scratch, ignore_errors=True)
 
 
 def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
-             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE)) -> dict:
+             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE), handoff: Handoff | None = None) -> dict:
   """First attempts of cells that differ only in their seed (and task, early stop:
   train.study.spec.packs_of), as one program (`train.run --seeds [--tasks] [--early-stops]`);
   members: each run's folder in the program's output (train.study.spec.pack_folders); then the
@@ -126,7 +182,7 @@ def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
     trained, results = open(log).read() if os.path.exists(log) else "", {}
     for m in members:  # a run that did not end failed with the program (its checkpoints, if any, come back)
       phase, code, output = evaluated.get(m, ("train", rc or 1, ""))
-      results[m] = _outcome(folders[m], code, phase, trained + output)
+      results[m] = _outcome(folders[m], code, phase, trained + output, handoff)
     return {"cells": results}
   finally:
     shutil.rmtree(scratch, ignore_errors=True)
@@ -155,14 +211,18 @@ def _evaluate_together(folders: dict[str, str], eval_args: list[str], command: t
   return {m: ("evaluate", rc, output) for m in folders}
 
 
-def _outcome(folder: str, rc: int, phase: str, output: str) -> dict:
-  """An attempt's result: {"rc", "phase", "tar" (the run folder, or None), "log_tail", "worker"};
-  the output is appended to the folder's study-attempts.log (every attempt's, in order)."""
+def _outcome(folder: str, rc: int, phase: str, output: str, handoff: Handoff | None = None) -> dict:
+  """An attempt's result: {"rc", "phase", "tar" (the run folder, or None), "moved" (the run folder's
+  path in the study's handoff folder, where this worker shares it, instead of a tar), "log_tail",
+  "worker"}; the output is appended to the folder's study-attempts.log (every attempt's, in order)."""
+  res = {"rc": rc, "phase": phase, "tar": None, "log_tail": output[-2000:], "worker": _worker_name()}
   if not os.path.isdir(folder):
-    return {"rc": rc, "phase": phase, "tar": None, "log_tail": output[-2000:], "worker": _worker_name()}
+    return res
   with open(os.path.join(folder, "study-attempts.log"), "a") as f:
     f.write(output)
-  return {"rc": rc, "phase": phase, "tar": pack(folder), "log_tail": output[-2000:], "worker": _worker_name()}
+  if handoff is not None and handoff.shared():
+    return {**res, "moved": handoff.take(folder)}
+  return {**res, "tar": pack(folder)}
 
 
 def run_in_place(run_args: list[str], eval_args: list[str], out: str, db: str, resume: bool, train: bool = True,
