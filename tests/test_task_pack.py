@@ -167,9 +167,11 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
   from train import evaluate, evaluation
   from train.db import ExperimentDB, default_path
   from train.evaluation import report_path, suite_scenes
-  # on the CPU one policy after another (vmapped_trials); here vmapped, as on a GPU
+  # on the CPU one policy after another (vmapped_trials); here vmapped, as on a GPU, 3 policies a
+  # call (EVAL_ENVS_PER_CALL: 9 environments): the second call the last run's, filled up with copies
   with pytest.MonkeyPatch.context() as mp:
     mp.setattr(evaluation, "vmapped_trials", lambda: True)
+    mp.setattr(evaluation, "EVAL_ENVS_PER_CALL", 9)
     assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
   scenes = suite_scenes(load_config(ASC))
   assert len(scenes) >= 4 and scenes == suite_scenes(load_config(DES))
@@ -179,18 +181,21 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
     rows = ExperimentDB(default_path(os.path.dirname(f))).evals(run_id)
     assert sorted((r["scene"], r["trial"]) for r in rows) == sorted((sc, i) for sc in scenes for i in range(3))
   assert together[(folders[0], "hardest")]["per_trial"]["final_z"] != together[(folders[1], "hardest")]["per_trial"]["final_z"]
-  # the descent run alone (not the task whose environment the program builds), then the runs
-  # together one policy after another (the CPU's way): each run's figures those the run gets alone
-  assert evaluate.main([folders[1], "--suite", "--trials", "3"]) == 0
-  alone = {scene: json.load(open(report_path(folders[1], scene, None))) for scene in scenes}
+  # two descent runs alone (not the task whose environment the program builds; one in each call),
+  # then the runs together one policy after another (the CPU's way): each run's figures those the
+  # run gets alone
+  descents = [folders[1], folders[3]]
+  for f in descents:
+    assert evaluate.main([f, "--suite", "--trials", "3"]) == 0
+  alone = {(f, scene): json.load(open(report_path(f, scene, None))) for f in descents for scene in scenes}
   assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
-  for scene in scenes:
-    assert alone[scene]["run_id"] == together[(folders[1], scene)]["run_id"]
-    one_by_one = json.load(open(report_path(folders[1], scene, None)))
-    assert one_by_one["per_trial"] == alone[scene]["per_trial"]  # the same program: bit for bit
+  for f, scene in alone:
+    assert alone[(f, scene)]["run_id"] == together[(f, scene)]["run_id"]
+    one_by_one = json.load(open(report_path(f, scene, None)))
+    assert one_by_one["per_trial"] == alone[(f, scene)]["per_trial"]  # the same program: bit for bit
     for name in ("progress", "pitch_rate", "final_x", "final_z", "length"):
-      np.testing.assert_allclose(together[(folders[1], scene)]["per_trial"][name], alone[scene]["per_trial"][name],
-                                 rtol=1e-4, atol=1e-5, err_msg=f"{scene} {name}")
+      np.testing.assert_allclose(together[(f, scene)]["per_trial"][name], alone[(f, scene)]["per_trial"][name],
+                                 rtol=1e-4, atol=1e-5, err_msg=f"{f} {scene} {name}")
 
 
 def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):

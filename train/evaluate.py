@@ -18,7 +18,8 @@ the trials are samples. `--baseline NAME --task TASK [RUN_DIR]` evaluates a base
 (mjx_tracks.baselines: zero, full, random, scripted) the same way, recorded as a run of algorithm
 `baseline` (default folder runs/baselines/TASK-NAME). `RUN_DIR RUN_DIR ...` evaluates several runs
 in one process, the runs of one network whose tasks one program can take as data (a study's pack:
-`train.run --seeds` / `--tasks`) in one vmapped rollout per scene program (on the CPU one policy
+`train.run --seeds` / `--tasks`) in one vmapped rollout per scene program (at most
+train.evaluation.EVAL_ENVS_PER_CALL environments a call, policies x trials; on the CPU one policy
 after another), every run's reports and trial rows its own (the same trials as alone; floats
 within the vmap's rounding).
 """
@@ -179,7 +180,9 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
   run = policies_runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
                         None if all(c == cfgs[0] for c in own) else own)
   from train import evaluation  # noqa: PLC0415  (its vmapped_trials, as policies_runner reads it)
-  how = "in one program" if evaluation.vmapped_trials() else "one after another (on the CPU)"
+  per_call = evaluation.policies_per_call(len(slots), args.trials)
+  how = ("one after another (on the CPU)" if not evaluation.vmapped_trials() else "in one program"
+         + ("" if per_call == len(slots) else f", {per_call} a call ({evaluation.EVAL_ENVS_PER_CALL:,} environments at most)"))
   for scene in scenes:
     print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
           f"for {len(slots)} policies of {len(runs)} runs {how}, compiling first where no scene before it "

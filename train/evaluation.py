@@ -253,15 +253,45 @@ def group_trial_runner(cfg0: TaskConfig, scene: str, make_act, trials: int, eps:
   return one
 
 
+# Environments one call of an evaluation program steps at most (policies x trials): a pack's policies
+# beyond it go through the same program in chunks (policies_per_call). A GPU's memory bounds a batch;
+# the paper study's PPO program trains 20 x 4,096 = 81,920 robots on one, and its pack's final
+# evaluation is 80 policies x 100 trials = 8,000, within one call.
+EVAL_ENVS_PER_CALL = 32_768
+
+
+def policies_per_call(policies: int, trials: int) -> int:
+  """How many policies' trials one call of pack_trial_runner's program takes: all of them, or as
+  many as EVAL_ENVS_PER_CALL holds (at least one)."""
+  return min(policies, max(1, EVAL_ENVS_PER_CALL // trials))
+
+
+def _in_chunks(fn, params, data, size: int, per_policy_data: bool):
+  """fn(params, data)'s figures over the leading policy axis, `size` policies a call; the last call
+  filled up with copies of the last policy (one compiled program for every call), dropped after."""
+  import jax  # noqa: PLC0415
+  n = len(jax.tree_util.tree_leaves(params)[0])
+  if size >= n:
+    return fn(params, data)
+  calls = []
+  for start in range(0, n, size):
+    rows = np.minimum(np.arange(start, start + size), n - 1)
+    acc = fn(jax.tree_util.tree_map(lambda x, r=rows: x[r], params),
+             jax.tree_util.tree_map(lambda x, r=rows: x[r], data) if per_policy_data else data)
+    calls.append({k: np.asarray(v)[:min(size, n - start)] for k, v in acc.items()})
+  return {k: np.concatenate([c[k] for c in calls]) for k in calls[0]}
+
+
 def pack_trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int, eps: float, seed: int,
                       configs: list[TaskConfig] | None = None):
   """run(params with a leading policy axis, scene) -> [per-trial figures of each policy]:
   trial_runner's trials on any of `scenes` for several policies of one network in one program (the
-  rollout vmapped over the policies), compiled once per program of scene_programs (one for every
-  scene of a stair task). configs: each policy's task where they differ (mjx_tracks.envs.task_data:
-  runs that may share a program); each policy's trials are then those of the scene of its own task
-  (its stair direction, its reward's safety term). A policy's trials are those trial_runner gives it
-  alone: the same keys, starts and scenes (floats within the vmap's rounding)."""
+  rollout vmapped over the policies; at most policies_per_call a call), compiled once per program
+  of scene_programs (one for every scene of a stair task). configs: each policy's task where they
+  differ (mjx_tracks.envs.task_data: runs that may share a program); each policy's trials are then
+  those of the scene of its own task (its stair direction, its reward's safety term). A policy's
+  trials are those trial_runner gives it alone: the same keys, starts and scenes (floats within the
+  vmap's rounding)."""
   import jax  # noqa: PLC0415
 
   from mjx_tracks.envs.task_data import stacked, task_data  # noqa: PLC0415
@@ -285,15 +315,19 @@ def pack_trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int
     programs.update({scene: (compiled, stacked([task_data(scene_config(c, scene), cfg) for c in configs]))
                      for scene in draws})
 
+  def size(params) -> int:
+    return policies_per_call(len(jax.tree_util.tree_leaves(params)[0]), trials)
+
   def run(params, scene: str) -> list[dict]:
     compiled, data = programs[scene]
-    acc = compiled(params, data)
+    acc = _in_chunks(compiled, params, data, size(params), configs is not None)
     return [per_trial_figures({k: v[i] for k, v in acc.items()}) for i in range(len(acc["length"]))]
 
   def compile_for(params, scene: str):
-    """The scene's program compiled for params like these, ahead of run (train.core.ahead)."""
+    """The scene's program compiled for params like these (a call's worth), ahead of run (train.core.ahead)."""
     compiled, data = programs[scene]
-    return compiled.lower(params, data).compile()
+    first = lambda tree: jax.tree_util.tree_map(lambda x: x[:size(params)], tree)  # noqa: E731
+    return compiled.lower(first(params), first(data) if configs is not None else data).compile()
 
   run.compile_for = compile_for
   return run
