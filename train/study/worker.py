@@ -60,7 +60,7 @@ class Handoff:
   def create(study_folder: str) -> Handoff:
     """A new STUDY/.handoff with a token of its own; what an earlier start left there is removed (no
     attempt of that start settles now)."""
-    folder = os.path.join(study_folder, ".handoff")
+    folder = os.path.abspath(os.path.join(study_folder, ".handoff"))  # workers' working folders differ
     shutil.rmtree(folder, ignore_errors=True)
     os.makedirs(folder)
     handoff = Handoff(folder, uuid.uuid4().hex)
