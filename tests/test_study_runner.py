@@ -70,6 +70,8 @@ def test_crashes_and_killed_workers_are_retried_recorded_and_not_rerun(tmp_path)
                          move_folders=False).run()  # as from workers on other machines: tars
     killer.join()
     assert not os.path.exists(os.path.join(folder, ".handoff"))
+    returned = json.load(open(os.path.join(folder, "state.json")))["cells"]
+    assert {a.get("returned") for c in returned.values() for a in c["attempts"] if a.get("returned")} == {"tar"}
     assert counts == {"done": 6, "running": 0, "queued": 0, "failed": 0}  # 4 trained runs, 2 baseline evaluations
     state = json.load(open(os.path.join(folder, "state.json")))["cells"]
     slow = state[SLOW]["attempts"]
@@ -278,7 +280,9 @@ def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_ow
   starts = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["started"] for t in spec.tasks)
   ends = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["ended"] for t in spec.tasks)
   assert starts[1] < ends[0]  # the two packs ran at once
-  assert os.listdir(os.path.join(folder, ".handoff")) == ["token"]  # every folder moved in was taken
+  [mine] = os.listdir(os.path.join(folder, ".handoff"))  # the study process's handoff folder
+  assert os.listdir(os.path.join(folder, ".handoff", mine)) == ["token"]  # every folder moved in was taken
+  assert all(a["returned"] == "moved" for c in state.values() for a in c["attempts"])  # all, the retries too
 
 
 def test_a_pack_of_tasks_and_groups_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):

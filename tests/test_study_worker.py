@@ -37,7 +37,7 @@ def _files(folder) -> list[str]:
 
 
 def test_a_worker_sharing_the_studys_filesystem_moves_the_run_folder_and_one_elsewhere_sends_a_tar(tmp_path):
-  handoff = worker.Handoff.create(str(tmp_path / "study"))
+  handoff, lock = worker.Handoff.create(str(tmp_path / "study"))
 
   def run_folder(name: str) -> str:
     folder = tmp_path / name
@@ -52,14 +52,24 @@ def test_a_worker_sharing_the_studys_filesystem_moves_the_run_folder_and_one_els
   elsewhere = dataclasses.replace(handoff, folder=str(tmp_path / "not-here"))  # another machine: no such folder
   sent = worker._outcome(run_folder("b"), 0, "evaluate", "its output", elsewhere)
   assert "moved" not in sent and sent["tar"] and os.path.isdir(tmp_path / "b")
-  for res, name in ((moved, "got-a"), (sent, "got-b")):
+  for res, name, how in ((moved, "got-a", "moved"), (sent, "got-b", "tar")):
     got = tmp_path / name
     got.mkdir()
     (got / "stale").write_text("an earlier attempt's")  # replaced by what came back
-    assert worker.receive(res, str(got))
+    assert worker.receive(res, str(got)) == how
     assert _files(got) == ["checkpoints/8/state.bin", "run.json", "study-attempts.log"]
     assert (got / "study-attempts.log").read_text() == "its output"
   assert os.listdir(handoff.folder) == [worker.Handoff.TOKEN]  # taken: nothing left behind
-  assert not worker.receive({**sent, "tar": None}, str(tmp_path / "nothing"))
-  again = worker.Handoff.create(str(tmp_path / "study"))  # the study started again: the old token is stale
-  assert again.shared() and not handoff.shared()
+  assert worker.receive({**sent, "tar": None}, str(tmp_path / "nothing")) is None
+  kept = tmp_path / "got-a"
+  assert worker.receive(moved, str(kept)) is None and _files(kept)  # gone since: the folder there is kept
+  # another study process on the folder while this one runs: neither removes the other's
+  other, other_lock = worker.Handoff.create(str(tmp_path / "study"))
+  assert other.shared() and handoff.shared() and other.folder != handoff.folder
+  worker._outcome(run_folder("c"), 0, "evaluate", "", handoff)  # moved in after its process ended ...
+  lock.close()
+  other_lock.close()
+  again, again_lock = worker.Handoff.create(str(tmp_path / "study"))  # ... removed by the next start
+  assert again.shared() and not handoff.shared() and not other.shared()
+  assert os.listdir(os.path.dirname(again.folder)) == [os.path.basename(again.folder)]
+  again_lock.close()

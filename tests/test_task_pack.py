@@ -156,10 +156,10 @@ def test_the_command_trains_each_task_with_each_seed_and_early_stop_and_records_
     db = ExperimentDB(default_path(str(folder.parent)))
     assert [r["run_id"] for r in db.runs()] == [record["run_id"]] and db.stats(record["run_id"])  # its rows, its statistics
     assert db.run(record["run_id"])["status"] == ("done" if cell.group == "whole" else "stopped_early")
-  _the_runs_evaluated_together_get_what_each_gets_alone([str(out / m) for m in pack_folders(pack)])
+  _the_runs_evaluated_together_get_what_each_gets_alone([str(out / m) for m in pack_folders(pack)], capsys)
 
 
-def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
+def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
   """`train.evaluate RUN RUN ...` (a study's pack): the four runs' suites in one program, the two
   tasks as data; each run's reports and trial rows its own (the database beside its folder), each
   as `train.evaluate RUN` of the run alone writes them (the same trials: floats within the vmap's
@@ -173,6 +173,7 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders):
     mp.setattr(evaluation, "vmapped_trials", lambda: True)
     mp.setattr(evaluation, "EVAL_ENVS_PER_CALL", 9)
     assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
+  assert "for 4 policies of 4 runs in one program, 3 a call (9 environments at most)" in capsys.readouterr().err
   scenes = suite_scenes(load_config(ASC))
   assert len(scenes) >= 4 and scenes == suite_scenes(load_config(DES))
   together = {(f, scene): json.load(open(report_path(f, scene, None))) for f in folders for scene in scenes}

@@ -152,7 +152,8 @@ class StudyRunner:
     self.submitted: list = []  # every attempt's future, in order
     self.owners: dict[str, list[str]] = {}  # an attempt's key -> the cells it runs (several: a pack)
     os.makedirs(os.path.join(folder, "runs"), exist_ok=True)
-    self.handoff = Handoff.create(folder) if move_folders else None
+    # the handoff folder's token file stays open (locked) while this runner lives
+    self.handoff, self._handoff_lock = Handoff.create(folder) if move_folders else (None, None)
     from train.study.results import write_spec  # noqa: PLC0415  (results imports this module)
     write_spec(folder, spec)
     self.state = StudyState.load(folder, list(self.cells))
@@ -224,7 +225,11 @@ class StudyRunner:
     record = self.state.cells[cid]
     attempt = record["attempts"][-1]
     db, local = ExperimentDB(os.path.join(self.folder, STUDY_DB)), cell_folder(self.folder, self.cells[cid])
-    if receive(res, local):
+    returned = receive(res, local)
+    if res.get("moved") and not returned:  # moved in, then gone before the study took it
+      res = {**res, "rc": res["rc"] or 1, "error": f"its run folder, moved to {res['moved']}, is gone"}
+    if returned:
+      attempt["returned"] = returned  # how the run folder came back: moved (a shared filesystem) or tar
       if os.path.exists(os.path.join(local, RUN_DB)):
         db.import_runs(os.path.join(local, RUN_DB), local)
         if self.mirror_db:

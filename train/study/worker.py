@@ -6,6 +6,8 @@ machine)."""
 from __future__ import annotations
 
 import dataclasses
+import errno
+import fcntl
 import io
 import json
 import os
@@ -44,29 +46,38 @@ def unpack(data: bytes, folder: str) -> None:
     tar.extractall(folder, filter="data")
 
 
+HANDOFF = ".handoff"  # STUDY/.handoff: a folder per study process (its token's), where run folders are moved in
+
+
 @dataclasses.dataclass(frozen=True)
 class Handoff:
-  """STUDY/.handoff, where a worker that shares the study's filesystem moves a run folder instead of
-  sending it back as a tar: no gzip, no copy through Dask, no whole pack of checkpoints in memory
-  (the paper study's 20 PPO runs, ~2 GB of checkpoints, took 55-63 s to come back as tars on one
-  host: results/speed/group/paper-packed-2-H200-2026-11-28b.md). A worker shares it where it
-  reads the study's token there; a worker on another machine does not, and sends tars."""
+  """STUDY/.handoff/<token>, where a worker that shares the study's filesystem moves a run folder
+  instead of sending it back as a tar: no gzip, no copy through Dask, no whole pack of checkpoints in
+  memory (the paper study's 20 PPO runs, ~2 GB of checkpoints, took 55-63 s to come back as tars on
+  one host: results/speed/group/paper-packed-2-H200-2026-11-28b.md). A worker shares it where it
+  reads the study process's token there; a worker on another machine does not, and sends tars."""
   folder: str  # holds TOKEN and the folders moved in, each under a name of its own until the study takes it
   token: str
 
   TOKEN = "token"
 
   @staticmethod
-  def create(study_folder: str) -> Handoff:
-    """A new STUDY/.handoff with a token of its own; what an earlier start left there is removed (no
-    attempt of that start settles now)."""
-    folder = os.path.abspath(os.path.join(study_folder, ".handoff"))  # workers' working folders differ
-    shutil.rmtree(folder, ignore_errors=True)
-    os.makedirs(folder)
-    handoff = Handoff(folder, uuid.uuid4().hex)
-    with open(os.path.join(folder, Handoff.TOKEN), "w") as f:  # half written: a worker sends a tar
-      f.write(handoff.token)
-    return handoff
+  def create(study_folder: str):
+    """(a new handoff folder with a token of its own, its token file held locked for as long as the
+    caller keeps it open); the folders of earlier study processes are removed, unless one still
+    holds its own (two processes on one study folder never remove each other's)."""
+    root = os.path.abspath(os.path.join(study_folder, HANDOFF))  # workers' working folders differ
+    os.makedirs(root, exist_ok=True)
+    for name in os.listdir(root):
+      _remove_unless_held(os.path.join(root, name))
+    handoff = Handoff(os.path.join(root, uuid.uuid4().hex), "")
+    handoff = dataclasses.replace(handoff, token=os.path.basename(handoff.folder))
+    os.makedirs(handoff.folder)
+    lock = open(os.path.join(handoff.folder, Handoff.TOKEN), "w")  # half written: a worker sends a tar
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    lock.write(handoff.token)
+    lock.flush()
+    return handoff, lock
 
   def shared(self) -> bool:
     """Whether this process sees the study's folder (its token there)."""
@@ -77,23 +88,52 @@ class Handoff:
       return False
 
   def take(self, folder: str) -> str:
-    """Moves the folder into STUDY/.handoff; its new path (a rename where both are on one filesystem)."""
+    """Moves the folder into the handoff folder; its new path (a rename where both are on one
+    filesystem, else a copy; an error, not a folder made anew, where the handoff folder is gone)."""
     moved = os.path.join(self.folder, uuid.uuid4().hex)
-    shutil.move(folder, moved)
+    try:
+      os.rename(folder, moved)
+    except OSError as e:
+      if e.errno != errno.EXDEV:
+        raise
+      shutil.move(folder, moved)
     return moved
 
 
-def receive(res: dict, folder: str) -> bool:
+def _remove_unless_held(folder: str) -> None:
+  """Removes an earlier study process's handoff folder (the folders its workers moved in after it
+  ended) unless that process still holds its token; one without a token yet is left."""
+  try:
+    lock = open(os.path.join(folder, Handoff.TOKEN))
+  except OSError:
+    return
+  with lock:
+    try:
+      fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+      return  # another study process on this folder, running
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+def receive(res: dict, folder: str) -> str | None:
   """Puts an attempt's run folder (res: run_cell's result or a pack's cell's) at `folder`, replacing
-  what was there: moved from STUDY/.handoff, or unpacked from its tar; whether one came back."""
-  if not res.get("moved") and res.get("tar") is None:
-    return False
-  shutil.rmtree(folder, ignore_errors=True)
+  what was there only once it is in place beside it: moved from the handoff folder ("moved"), or
+  unpacked from its tar ("tar"); None where none came back (or the moved one is gone)."""
   if res.get("moved"):
-    shutil.move(res["moved"], folder)
+    if not os.path.isdir(res["moved"]):
+      return None
+    incoming = folder + ".incoming"
+    shutil.rmtree(incoming, ignore_errors=True)
+    shutil.move(res["moved"], incoming)
+  elif res.get("tar") is not None:
+    incoming = folder + ".incoming"
+    shutil.rmtree(incoming, ignore_errors=True)
+    unpack(res["tar"], incoming)
   else:
-    unpack(res["tar"], folder)
-  return True
+    return None
+  shutil.rmtree(folder, ignore_errors=True)
+  os.rename(incoming, folder)
+  return "moved" if res.get("moved") else "tar"
 
 
 def pid_file(out: str) -> str:
