@@ -70,8 +70,8 @@ class Handoff:
     os.makedirs(root, exist_ok=True)
     for name in os.listdir(root):
       _remove_unless_held(os.path.join(root, name))
-    handoff = Handoff(os.path.join(root, uuid.uuid4().hex), "")
-    handoff = dataclasses.replace(handoff, token=os.path.basename(handoff.folder))
+    token = uuid.uuid4().hex
+    handoff = Handoff(os.path.join(root, token), token)
     os.makedirs(handoff.folder)
     lock = open(os.path.join(handoff.folder, Handoff.TOKEN), "w")  # half written: a worker sends a tar
     fcntl.flock(lock, fcntl.LOCK_EX)
