@@ -181,8 +181,12 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
                         None if all(c == cfgs[0] for c in own) else own)
   from train import evaluation  # noqa: PLC0415  (its vmapped_trials, as policies_runner reads it)
   per_call = evaluation.policies_per_call(len(slots), args.trials)
-  how = ("one after another (on the CPU)" if not evaluation.vmapped_trials() else "in one program"
-         + ("" if per_call == len(slots) else f", {per_call} a call ({evaluation.EVAL_ENVS_PER_CALL:,} environments at most)"))
+  if not evaluation.vmapped_trials():
+    how = "one after another (on the CPU)"
+  elif per_call < len(slots):
+    how = f"in one program, {per_call} a call ({evaluation.EVAL_ENVS_PER_CALL:,} environments at most)"
+  else:
+    how = "in one program"
   for scene in scenes:
     print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
           f"for {len(slots)} policies of {len(runs)} runs {how}, compiling first where no scene before it "

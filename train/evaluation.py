@@ -266,11 +266,17 @@ def policies_per_call(policies: int, trials: int) -> int:
   return min(policies, max(1, EVAL_ENVS_PER_CALL // trials))
 
 
+def _policies(params) -> int:
+  """How many policies params hold (their leading axis)."""
+  import jax  # noqa: PLC0415
+  return len(jax.tree_util.tree_leaves(params)[0])
+
+
 def _in_chunks(fn, params, data, size: int, per_policy_data: bool):
   """fn(params, data)'s figures over the leading policy axis, `size` policies a call; the last call
   filled up with copies of the last policy (one compiled program for every call), dropped after."""
   import jax  # noqa: PLC0415
-  n = len(jax.tree_util.tree_leaves(params)[0])
+  n = _policies(params)
   if size >= n:
     return fn(params, data)
   calls = []
@@ -316,7 +322,7 @@ def pack_trial_runner(cfg0: TaskConfig, scenes: list[str], make_act, trials: int
                      for scene in draws})
 
   def size(params) -> int:
-    return policies_per_call(len(jax.tree_util.tree_leaves(params)[0]), trials)
+    return policies_per_call(_policies(params), trials)
 
   def run(params, scene: str) -> list[dict]:
     compiled, data = programs[scene]
@@ -365,7 +371,7 @@ def policy_by_policy_runner(cfg0: TaskConfig, scenes: list[str], make_act, trial
     return found
 
   def each(params) -> list[tuple[TaskConfig, object]]:
-    n = len(jax.tree_util.tree_leaves(params)[0])
+    n = _policies(params)
     return list(zip(configs or [cfg0] * n, (jax.tree_util.tree_map(lambda x, i=i: x[i], params) for i in range(n))))
 
   def run(params, scene: str) -> list[dict]:

@@ -28,7 +28,7 @@ import os
 import sys
 
 from mjx_tracks.envs.config import ConfigError
-from train.core.ahead import CHOICES as AHEAD_CHOICES
+from train.core.ahead import CHOICES as AHEAD_CHOICES, DEFAULT as AHEAD_DEFAULT
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, criterion_name
@@ -87,7 +87,7 @@ def parser() -> argparse.ArgumentParser:
                  help=f"wall time between checkpoints (default {CHECKPOINT_EVERY_S:g} s)")
   p.add_argument("--keep-checkpoints", type=int, default=KEEP, metavar="K",
                  help=f"checkpoints kept (default {KEEP})")
-  p.add_argument("--compile-ahead", choices=AHEAD_CHOICES, default="auto",
+  p.add_argument("--compile-ahead", choices=AHEAD_CHOICES, default=AHEAD_DEFAULT,
                  help="compile the in-training evaluations' programs in threads beside the training step's "
                       "(auto: where JAX's backend is not the CPU; train.core.ahead)")
   p.add_argument("--coordinator", metavar="HOST:PORT",

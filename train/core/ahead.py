@@ -19,6 +19,7 @@ import threading
 from typing import Any, Callable
 
 CHOICES = ("auto", "on", "off")  # train.run --compile-ahead
+DEFAULT = "auto"
 
 
 def wanted(choice: str) -> bool:
@@ -65,8 +66,11 @@ def _quietly(job: Callable[[], Any]) -> None:
     pass
 
 
-def start(computations, example) -> None:
-  """compile_ahead(example) for each computation that can (None and others are skipped)."""
+def start(choice: str, computations, example) -> None:
+  """compile_ahead(example) for each computation that can (None and others are skipped), where
+  `--compile-ahead choice` wants it here (wanted)."""
+  if not wanted(choice):
+    return
   for c in computations:
     if isinstance(c, CompiledAhead):
       c.compile_ahead(example)

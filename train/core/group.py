@@ -192,8 +192,7 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   states = init_group(t, plans, tasks)
   evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
-  if ahead.wanted(options.compile_ahead):
-    ahead.start((evaluate, probe), states)  # compiling beside the update's compilation
+  ahead.start(options.compile_ahead, (evaluate, probe), states)  # compiling beside the update's compilation
   update = compile_group(t, len(plans), tasks=tasks)
   parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
                    lambda summary, i=i: on_end(i, summary), tag) for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]

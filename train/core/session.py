@@ -25,7 +25,7 @@ from train.core.progress import Reporter
 class SessionOptions:
   checkpoint_every_s: float = CHECKPOINT_EVERY_S
   keep_checkpoints: int = KEEP
-  compile_ahead: str = "auto"  # the evaluations' programs compiled beside the training step's: train.core.ahead
+  compile_ahead: str = ahead.DEFAULT  # the evaluations' programs compiled beside the training step's: train.core.ahead
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,8 +83,7 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
           options: SessionOptions) -> tuple[Loop, Reporter]:
   plan = t.plan
   evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
-  if ahead.wanted(options.compile_ahead):
-    ahead.start((evaluate, probe), state)  # compiling beside the update's compilation
+  ahead.start(options.compile_ahead, (evaluate, probe), state)  # compiling beside the update's compilation
   update = compile_update(t)
   primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
   reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,

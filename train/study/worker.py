@@ -119,21 +119,18 @@ def receive(res: dict, folder: str) -> str | None:
   """Puts an attempt's run folder (res: run_cell's result or a pack's cell's) at `folder`, replacing
   what was there only once it is in place beside it: moved from the handoff folder ("moved"), or
   unpacked from its tar ("tar"); None where none came back (or the moved one is gone)."""
-  if res.get("moved"):
-    if not os.path.isdir(res["moved"]):
-      return None
-    incoming = folder + ".incoming"
-    shutil.rmtree(incoming, ignore_errors=True)
-    shutil.move(res["moved"], incoming)
-  elif res.get("tar") is not None:
-    incoming = folder + ".incoming"
-    shutil.rmtree(incoming, ignore_errors=True)
-    unpack(res["tar"], incoming)
-  else:
+  moved = res.get("moved")
+  if (moved and not os.path.isdir(moved)) or (not moved and res.get("tar") is None):
     return None
+  incoming = folder + ".incoming"
+  shutil.rmtree(incoming, ignore_errors=True)
+  if moved:
+    shutil.move(moved, incoming)
+  else:
+    unpack(res["tar"], incoming)
   shutil.rmtree(folder, ignore_errors=True)
   os.rename(incoming, folder)
-  return "moved" if res.get("moved") else "tar"
+  return "moved" if moved else "tar"
 
 
 def pid_file(out: str) -> str:
