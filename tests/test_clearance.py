@@ -101,11 +101,12 @@ def test_the_clearance_term_pays_in_proportion_to_the_margin_lost():
 
 def test_the_env_reads_its_kinds_clearance_only_where_the_term_is_on():
   """TrackedRobotEnv._clearance (what step hands the monitor): the nav kind's clearance of the
-  footprint with the term on, inf (no term) with it off; eager, nothing compiled."""
+  footprint with the term on, inf (no term) with it off; the clearances eager (the scene's draw one
+  program: eager, its ~150 operations compile one by one)."""
   import mjx_tracks  # noqa: PLC0415
   on = mjx_tracks.load("nav-obstacles", ["reward.clearance_penalty=0.5", "scene.nav_floor_obstacles=1"])
   off = mjx_tracks.load("nav-obstacles", ["scene.nav_floor_obstacles=1"])
-  scene = on.scene.sample(jax.random.PRNGKey(1), 1.0)
+  scene = jax.jit(on.scene.sample)(jax.random.PRNGKey(1), 1.0)
   pos, yaw = jnp.array([1.0, 0.0, 0.2]), jnp.float32(0.0)  # 1 m from the back wall; obstacles from x = 2 m
   got = float(on._clearance(pos, yaw, scene))
   want = float(on.kind.clearance(on.scene, scene, pos, yaw, jnp.array(on.footprint)))

@@ -95,8 +95,8 @@ def test_stair_and_terrain_worlds_watch_nothing():
 def test_no_random_spawn_starts_touching_a_wall_or_obstacle():
   env, flags = _watched()
   n = len(_poses())  # the other test's batch: the same program
-  scenes = jax.vmap(env.scene.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(3), 64 * n), 1.0)
-  qpos = jax.vmap(lambda p, y: env.sim.init_data(p, y).qpos)(scenes.spawn_pos, scenes.spawn_yaw)
+  scenes = jax.jit(jax.vmap(env.scene.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(3), 64 * n), 1.0)
+  qpos = jax.jit(jax.vmap(lambda p, y: env.sim.init_data(p, y).qpos))(scenes.spawn_pos, scenes.spawn_yaw)
   hits = [np.asarray(flags(qpos[k:k + n], scenes.box_pos[k:k + n], scenes.box_size[k:k + n])[0]) for k in range(0, 64 * n, n)]
   assert not np.concatenate(hits).any()
 
@@ -107,17 +107,17 @@ def test_footprint_clearance_reads_the_hand_derived_gap_and_zero_where_the_c_eng
   is the face's distance beyond y = 0.39 m (0 inside), and 0 in every case the C engine collides."""
   env, _ = _watched()
   assert env.footprint == pytest.approx((0.505, 0.39))
-  state = env.scene.sample(jax.random.PRNGKey(0), 1.0)
+  state = jax.jit(env.scene.sample)(jax.random.PRNGKey(0), 1.0)
+  clearance = jax.jit(lambda scene, pos, yaw: env.kind.clearance(env.scene, scene, pos, yaw, jnp.array(env.footprint)))
   for name, collides, boxes, y in _poses():
     if "floor" in name:
       continue
     face = boxes[0][0][1] - boxes[0][1][1] if boxes[0] is not HIDDEN else AREA_W / 2  # m, the near face's y
     scene = state.replace(box_pos=jnp.array([b[0] for b in boxes]), box_size=jnp.array([b[1] for b in boxes]))
-    got = float(env.kind.clearance(env.scene, scene, jnp.array([6.0, y, 0.2]), jnp.float32(0.0),
-                                   jnp.array(env.footprint)))
+    got = float(clearance(scene, jnp.array([6.0, y, 0.2]), jnp.float32(0.0)))
     assert got == pytest.approx(max(face - y - 0.39, 0.0), abs=1e-5), name
     assert (got == 0.0) == collides, name
   # turned by 90 degrees at the area's back wall (x = 0): the flipper tips face the side walls, the side the back wall
   scene = state.replace(box_pos=jnp.array([HIDDEN[0]] * 2), box_size=jnp.array([HIDDEN[1]] * 2))
-  got = env.kind.clearance(env.scene, scene, jnp.array([0.5, 0.0, 0.2]), jnp.float32(np.pi / 2), jnp.array(env.footprint))
+  got = clearance(scene, jnp.array([0.5, 0.0, 0.2]), jnp.float32(np.pi / 2))
   assert float(got) == pytest.approx(0.5 - 0.39, abs=1e-5)

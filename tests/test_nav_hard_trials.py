@@ -6,6 +6,7 @@ import os
 import sqlite3
 import sys
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -19,6 +20,10 @@ from scenes.geodesic import NODE_OFFSET  # noqa: E402
 from scenes.navigation import AREA_LEN  # noqa: E402
 from scenes.scene import SceneState  # noqa: E402
 from scenes.world import parked_xyz  # noqa: E402
+
+
+# the features of an area of AREA_LEN as one program (eager, each of its ~130 operations compiles alone)
+_features = jax.jit(lambda scene: layout_features(scene, AREA_LEN))
 
 
 def _scene(wall_top: float, floor_box) -> SceneState:
@@ -36,7 +41,7 @@ def test_the_widest_disc_is_half_the_opening_and_a_floor_box_in_it_narrows_it():
   # the bisection's resolution, and the geodesic's corner nodes sit NODE_OFFSET outside their
   # inflated boxes, which takes that much off a disc that just fits
   tol = (DISC_RANGE[1] - DISC_RANGE[0]) / 2 ** BISECTIONS + NODE_OFFSET
-  open_2m = layout_features(_scene(3.0, None), AREA_LEN)  # opening y in [3, 5]: a disc of radius 1 m passes
+  open_2m = _features(_scene(3.0, None))  # opening y in [3, 5]: a disc of radius 1 m passes
   assert float(open_2m["widest_disc"]) == pytest.approx(1.0, abs=tol)
   assert float(open_2m["opening_1"]) == pytest.approx(2.0) and float(open_2m["gap_C"]) == 1.5
   assert float(open_2m["floor_obstacles_kept"]) == 0 and np.isinf(float(open_2m["floor_to_wall_obstacle"]))
@@ -45,11 +50,11 @@ def test_the_widest_disc_is_half_the_opening_and_a_floor_box_in_it_narrows_it():
   # widest way is between the box and the outer wall, 1.0 m wide (a disc of 0.5 m); between box and
   # wall end the corners lie 0.75 m apart, and the geodesic's square inflation closes that way for
   # discs over 0.3 m (0.6 m across in y)
-  boxed = layout_features(_scene(3.0, (6.8, 3.8, 0.2, 0.2)), AREA_LEN)
+  boxed = _features(_scene(3.0, (6.8, 3.8, 0.2, 0.2)))
   assert float(boxed["widest_disc"]) == pytest.approx(0.5, abs=tol)
   assert float(boxed["floor_to_wall_obstacle"]) == pytest.approx(np.hypot(0.45, 0.6), abs=1e-5)
   assert float(boxed["floor_obstacles_kept"]) == 1
-  closed = layout_features(_scene(5.0, None), AREA_LEN)  # the wall closes the area: no way at all
+  closed = _features(_scene(5.0, None))  # the wall closes the area: no way at all
   assert float(closed["widest_disc"]) == 0.0
 
 

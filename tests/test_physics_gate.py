@@ -58,11 +58,12 @@ def test_the_launch_bound_is_the_belts_lift_and_a_jump_off_full_speed():
 
 
 def test_the_launch_check_passes_four_solver_iterations_and_fails_three():
-  """Full throttle at x0.8 friction into the hardest staircase, the evaluation's first 16 trials:
-  3 Newton iterations throw the chassis up far beyond what its belts and speed can (0.30 m in a
-  control step); 4 (the default) keep it near a climb's (~0.2 m)."""
+  """Full throttle at x0.8 friction into the hardest staircase, the evaluation's first 4 trials:
+  3 Newton iterations throw the chassis up beyond what its belts and speed can (0.30 m in a
+  control step; 0.40 m in one of the 4 trials, 1.18 m in 7 of 16); 4 (the default) keep it near a
+  climb's (~0.16 m)."""
   low = ("hardest+friction-low",)
-  good = gate.launch_check(gate.physics_of([]), scenes=low, trials=16)
-  bad = gate.launch_check(gate.physics_of(["physics.solver_iterations=3"]), scenes=low, trials=16)
+  good = gate.launch_check(gate.physics_of([]), scenes=low, trials=4)
+  bad = gate.launch_check(gate.physics_of(["physics.solver_iterations=3"]), scenes=low, trials=4)
   assert good[0].ok and good[0].value < 0.25
-  assert not bad[0].ok and bad[0].value > 0.4
+  assert not bad[0].ok and bad[0].value > 0.35

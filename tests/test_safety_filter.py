@@ -253,7 +253,7 @@ def test_full_throttle_at_a_wall_stops_short_of_it():
   1 m/s (the collision watch flags the touch: test_collisions.py). With the filter the robot drives
   up to the wall, never touches it and stops as near as the margin lets it."""
   env = mjx_tracks.load("nav", ["control.safety_filter.enabled=true"])
-  state0 = env.reset(jax.random.PRNGKey(0))
+  state0 = jax.jit(env.reset)(jax.random.PRNGKey(0))  # one program, not ~450 eager ones
 
   def drive(x):
     es = state0.pipeline_state

@@ -48,7 +48,7 @@ class _StopAfter:
 
 def _args(out, db, *more):
   """The training tests' tiny task (helpers.TINY: 5 physics steps per control step, no beams)."""
-  return ["--library", "sb3", "--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", "--steps", "400",
+  return ["--library", "sb3", "--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", "--steps", "250",
           "--hp", "training_metrics_steps=100", *TINY, "--out", str(out), "--db", str(db), *more]
 
 
@@ -63,37 +63,37 @@ def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, m
   from train.server.settings import Settings
   out, db_path = tmp_path / "runs" / "a", tmp_path / "runs" / "experiments.sqlite"
   sb3_log_folders = set(glob.glob(os.path.join(tempfile.gettempdir(), "SB3-*")))  # SB3's default logger makes one per learn()
-  monkeypatch.setattr(interrupts, "StopRequest", _StopAfter(150))
+  monkeypatch.setattr(interrupts, "StopRequest", _StopAfter(120))
   assert run.main(_args(out, db_path)) == 130  # stopped: a checkpoint and the policy saved
   (first,) = [int(p.name) for p in (out / "checkpoints").iterdir()]
-  assert 150 <= first < 400 and (out / "checkpoints" / str(first) / "replay_buffer.pkl").exists()
+  assert 120 <= first < 250 and (out / "checkpoints" / str(first) / "replay_buffer.pkl").exists()
   monkeypatch.setattr(interrupts, "StopRequest", _StopAfter(10**9))
   assert run.main(["--resume", str(out), "--db", str(db_path)]) == 0
-  model = SAC.load(out / "checkpoints" / "400" / "model.zip", device="cpu")
-  model.load_replay_buffer(out / "checkpoints" / "400" / "replay_buffer.pkl")
+  model = SAC.load(out / "checkpoints" / "250" / "model.zip", device="cpu")
+  model.load_replay_buffer(out / "checkpoints" / "250" / "replay_buffer.pkl")
   # the buffer went on, not afresh: all but the stopping step's transition (SB3 stores a step after
   # its callback, which ended learn())
-  assert model.num_timesteps == 400 and model.replay_buffer.size() == 399
+  assert model.num_timesteps == 250 and model.replay_buffer.size() == 249
   db = ExperimentDB(str(db_path))
   (rec,) = db.runs()
   events = [e["event"] for e in db.events(rec["run_id"])]
   assert rec["status"] == "done" and events[:4] == ["started", "checkpoint", "interrupted", "resumed"]
-  assert [r["step"] for r in db.stats(rec["run_id"])][-1] == 400 and list((out / "tb").iterdir())
+  assert [r["step"] for r in db.stats(rec["run_id"])][-1] == 250 and list((out / "tb").iterdir())
   obs = np.random.default_rng(0).normal(size=(1000, model.observation_space.shape[0])).astype(np.float32)
   np.testing.assert_allclose(np.asarray(load_policy(str(out / "policy"))(obs)),
                              model.predict(obs, deterministic=True)[0], atol=1e-5)
   assert evaluate.main([str(out), "--trials", "2", "--db", str(db_path)]) == 0
   report = json.loads((out / "eval-hardest.json").read_text())
-  assert (report["trials"], report["policy_step"], report["run_id"]) == (2, 400, json.loads((out / "run.json").read_text())["run_id"])
+  assert (report["trials"], report["policy_step"], report["run_id"]) == (2, 250, json.loads((out / "run.json").read_text())["run_id"])
   client = TestClient(create_app(Settings(str(db_path), str(tmp_path / "runs"))), base_url="http://127.0.0.1")
   (shown,) = client.get("/api/runs").json()
-  assert shown["run_id"] == rec["run_id"] and shown["status"] == "done" and shown["step"] == 400
+  assert shown["run_id"] == rec["run_id"] and shown["status"] == "done" and shown["step"] == 250
   assert "sb3" in client.get("/api/trainers").json()["library_algos"]
   # --checkpoint evaluates an SB3 checkpoint as a killed run's: the newest holds the exported policy
   from train.core.policy import load_checkpoint_params, load_policy_params
   spec, params, step = load_checkpoint_params(str(out))
   exported_spec, exported = load_policy_params(str(out / "policy"))
-  assert (step, spec) == (400, exported_spec)
+  assert (step, spec) == (250, exported_spec)
   for a, b in zip(jax.tree_util.tree_leaves(params), jax.tree_util.tree_leaves(exported), strict=True):
     np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
   assert evaluate.main([str(out), "--checkpoint", str(first), "--trials", "2", "--out", str(tmp_path / "ck.json"),
@@ -102,15 +102,15 @@ def test_an_sb3_run_trains_stops_resumes_exports_evaluates_and_shows(tmp_path, m
   assert (ck["policy_step"], ck["checkpoint"]) == (first, True)
   # a damaged newest checkpoint: evaluating it fails in one line; training further falls back to the
   # one before, in one warning line, and records no step twice
-  (out / "checkpoints" / "400" / "model.zip").write_bytes(b"damaged")
-  with pytest.raises(ValueError, match="cannot read checkpoint 400"):
+  (out / "checkpoints" / "250" / "model.zip").write_bytes(b"damaged")
+  with pytest.raises(ValueError, match="cannot read checkpoint 250"):
     load_checkpoint_params(str(out))
   capsys.readouterr()
-  assert run.main(["--resume", str(out), "--db", str(db_path), "--steps", "450"]) == 0
+  assert run.main(["--resume", str(out), "--db", str(db_path), "--steps", "300"]) == 0
   said = capsys.readouterr()
   assert f"falling back to checkpoint {first:,}" in said.err and f"from its checkpoint at step {first:,}" in said.out
   steps = [r["step"] for r in db.stats(rec["run_id"])]
-  assert steps == sorted(set(steps)) and steps[-1] == 450
+  assert steps == sorted(set(steps)) and steps[-1] == 300
   assert set(glob.glob(os.path.join(tempfile.gettempdir(), "SB3-*"))) == sb3_log_folders
 
 

@@ -77,9 +77,9 @@ def test_held_out_navigation_areas_narrow_the_gap_or_add_obstacles_and_stay_pass
                                                                        "held-out/long-area"]
   narrow, dense = (make_scene(kind.pinned(cfg, f"held-out/{n}").scene) for n in ("narrow-gap", "dense-obstacles"))
   assert dense.floor_obstacles == 12 and narrow.floor_obstacles == 0
-  s = jax.vmap(narrow.sample, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 200), 0.5)
+  s = jax.jit(jax.vmap(narrow.sample, in_axes=(0, None)))(jax.random.split(jax.random.PRNGKey(0), 200), 0.5)
   np.testing.assert_allclose(np.asarray(s.xi[:, 4]), 0.9, atol=1e-6)  # C, m
-  free = jax.vmap(narrow.free_space_distance)(s, s.spawn_pos)
+  free = jax.jit(jax.vmap(narrow.free_space_distance))(s, s.spawn_pos)
   assert np.isfinite(np.asarray(free)).all()  # a path for the robot's clearance remains
   with pytest.raises(ConfigError, match=r"evaluation.held_out_nav\[0\].gap: needs 0.85"):
     load_config("nav", ["evaluation.held_out_nav=[{name: slit, gap: [0.5, 0.5], floor_obstacles: 0, length: 12}]"])
