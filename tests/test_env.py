@@ -198,7 +198,7 @@ def test_navigation_measures_the_free_space_path_and_a_collision_ends_the_episod
   s = reset(jax.random.split(jax.random.PRNGKey(8), n))
   es = s.pipeline_state
   chassis = es.data.xpos[:, core.sim.layout.chassis_body]
-  free = jax.vmap(core.scene.free_space_distance)(es.scene, chassis)
+  free = jax.jit(jax.vmap(core.scene.free_space_distance))(es.scene, chassis)
   np.testing.assert_allclose(np.asarray(es.d0), np.asarray(free) - cfg.episode.goal_tolerance, rtol=1e-5)
   box_pos, box_size = np.asarray(es.scene.box_pos[0, 0]), np.asarray(es.scene.box_size[0, 0])
   face_y = box_pos[1] - box_size[1]  # the obstacle juts from the left wall: its face toward -y
@@ -240,7 +240,7 @@ def test_observation_parts_read_their_sources():
   np.testing.assert_allclose(part["v"], (rot.T @ np.asarray(es.data.qvel[:3]))[0], atol=1e-5)
   assert part["v"][0] > 0.1  # driving forward
   m = core.sim.with_boxes(es.scene.box_pos, es.scene.box_size)
-  beams = np.asarray(depth_beams(core.beams, m, es.data, core.sim.layout.camera_site))
+  beams = np.asarray(jax.jit(lambda m, d: depth_beams(core.beams, m, d, core.sim.layout.camera_site))(m, es.data))
   np.testing.assert_allclose(part["vertical_beams"], beams[: core.cfg.observation.vertical_beams], atol=1e-5)
   assert (part["vertical_beams"] > 0).any()  # the camera sees the floor and the first step
 

@@ -21,8 +21,11 @@ WALL_LO, WALL_HI = jnp.array([[4.0, -5.0]]), jnp.array([[5.0, 3.0]])
 TOL = 4 * NODE_OFFSET + 1e-4  # m: corners sit NODE_OFFSET off the inflated box
 
 
+_geodesic = jax.jit(geodesic_distance)  # one program per wall count (eager, each operation compiles alone)
+
+
 def g(p, goal, lo=WALL_LO, hi=WALL_HI, r=R):
-  return float(geodesic_distance(jnp.array(p), jnp.array(goal), lo, hi, *AREA, r))
+  return float(_geodesic(jnp.array(p), jnp.array(goal), lo, hi, *AREA, jnp.float32(r)))
 
 
 def test_a_clear_line_is_the_straight_distance():
