@@ -261,13 +261,13 @@ def test_gymnasium_checker_passes_and_vector_env_steps(capsys):
 
 
 def test_gymnasium_env_keeps_its_curriculum_across_resets():
-  """A forward-driving policy for 40 episodes of one Env: the eps reported at reset rises above 0
+  """A forward-driving policy for 20 episodes (the curriculum's window) of one Env: the eps reported at reset rises above 0
   and, with the window's missing episodes counted as 0, stays below 1 early on."""
   env = gym.make("mjx_tracks/asc-inc-cog-v0").unwrapped
   forward = np.array([1.0, 0.3, 0.0, 0.0, 0.0], np.float32)
   eps_at_reset = []
   _, info = env.reset(seed=0)
-  for _ in range(40):
+  for _ in range(20):
     eps_at_reset.append(info["eps"])
     done = False
     while not done:
@@ -279,7 +279,7 @@ def test_gymnasium_env_keeps_its_curriculum_across_resets():
   assert eps_at_reset[0] == 0.0 and max(eps_at_reset) > 0.0
   assert all(e <= (i / window) + 1e-6 for i, e in enumerate(eps_at_reset[:window]))  # < 1 early on
   kept = env.curriculum_state()
-  assert int(kept.curriculum.finished) == 40
+  assert int(kept.curriculum.finished) == 20
   fresh = gym.make("mjx_tracks/asc-inc-cog-v0").unwrapped
   fresh.set_curriculum_state(kept)
   assert fresh.reset(seed=1)[1]["eps"] == pytest.approx(float(kept.curriculum.eps))
