@@ -261,8 +261,8 @@ def test_gymnasium_checker_passes_and_vector_env_steps(capsys):
 
 
 def test_gymnasium_env_keeps_its_curriculum_across_resets():
-  """A forward-driving policy for 20 episodes (the curriculum's window) of one Env: the eps reported at reset rises above 0
-  and, with the window's missing episodes counted as 0, stays below 1 early on."""
+  """A forward-driving policy for 20 episodes (the curriculum's window) of one Env: the eps reported
+  at reset rises above 0 and, with the window's missing episodes counted as 0, stays below 1 early on."""
   env = gym.make("mjx_tracks/asc-inc-cog-v0").unwrapped
   forward = np.array([1.0, 0.3, 0.0, 0.0, 0.0], np.float32)
   eps_at_reset = []
