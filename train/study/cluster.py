@@ -1,19 +1,23 @@
 """The Dask cluster that runs studies and the server's launches.
 
 Started here (the default), it is one worker per GPU (CUDA_VISIBLE_DEVICES pinned) with
-`slots_per_gpu` run slots and a CPU worker (JAX_PLATFORMS=cpu) with `cpu_slots`; every endpoint
-(scheduler, nannies, workers) listens on 127.0.0.1 only, speaks TLS with credentials made for this
-cluster alone (mutual TLS: a process without them cannot connect, not even another user of this
-machine), and no Dask dashboard is started. An existing cluster (`--scheduler`) on another host must
-be a `tls://` address with `--tls-ca-file`, `--tls-cert` and `--tls-key` (Dask's own TLS
-authentication); a loopback address is trusted as given.
+`slots_per_gpu` run slots (more than one: under CUDA MPS, train.study.mps) and a CPU worker
+(JAX_PLATFORMS=cpu) with `cpu_slots`; every endpoint (scheduler, nannies, workers) listens on
+127.0.0.1 only, speaks TLS with credentials made for this cluster alone (mutual TLS: a process
+without them cannot connect, not even another user of this machine), and no Dask dashboard is
+started. An existing cluster (`--scheduler`) on another host must be a `tls://` address with
+`--tls-ca-file`, `--tls-cert` and `--tls-key` (Dask's own TLS authentication); a loopback address is
+trusted as given.
 """
 
 from __future__ import annotations
 
 import argparse
+import atexit
 import subprocess
 import urllib.parse
+
+from train.study import mps
 
 QUIET = {"DASK_LOGGING__DISTRIBUTED": "error"}  # workers log errors only (the study prints progress)
 LOOPBACK_HOST = "127.0.0.1"  # where the local cluster's endpoints listen
@@ -41,6 +45,9 @@ def add_cluster_args(p: argparse.ArgumentParser) -> None:
   p.add_argument("--gpus", help="local GPUs to use, e.g. 0,1 (default: all)")
   p.add_argument("--slots-per-gpu", type=int, default=1, help="runs at once on one GPU (default 1)")
   p.add_argument("--cpu-slots", type=int, help="runs at once on the CPU backend (default: 1 without GPUs, else 0)")
+  p.add_argument("--mps", default="auto", choices=mps.MODES,
+                 help="CUDA MPS for runs sharing a GPU, each kept to %d %% of its multiprocessors (default auto: "
+                      "where --slots-per-gpu > 1 and nvidia-cuda-mps-control is installed)" % mps.SM_SHARE)
 
 
 def _nanny(slots: int, kind: str, env: dict, cls) -> dict:
@@ -49,11 +56,13 @@ def _nanny(slots: int, kind: str, env: dict, cls) -> dict:
                                   "env": {**env, **QUIET}}}
 
 
-def worker_specs(gpus: list[str], slots_per_gpu: int, cpu_slots: int) -> dict:
-  """SpecCluster worker specs; resources `gpu` / `cpu` count run slots."""
+def worker_specs(gpus: list[str], slots_per_gpu: int, cpu_slots: int, gpu_env: dict | None = None) -> dict:
+  """SpecCluster worker specs; resources `gpu` / `cpu` count run slots; gpu_env: more environment of
+  the GPU workers' runs (an MPS daemon's client_env)."""
   from distributed import Nanny  # noqa: PLC0415
   # runs sharing a GPU split its memory (JAX takes 75 % of it per process by default)
   share = {"XLA_PYTHON_CLIENT_MEM_FRACTION": f"{0.9 / slots_per_gpu:.2f}"} if slots_per_gpu > 1 else {}
+  share = {**share, **(gpu_env or {})}
   specs = {f"gpu{g}": _nanny(slots_per_gpu, "gpu", {"CUDA_VISIBLE_DEVICES": g, **share}, Nanny) for g in gpus}
   if cpu_slots:
     specs["cpu"] = _nanny(cpu_slots, "cpu", {"JAX_PLATFORMS": "cpu", "CUDA_VISIBLE_DEVICES": ""}, Nanny)
@@ -102,6 +111,25 @@ def remote_security(address: str, ca: str | None, cert: str | None, key: str | N
   return None
 
 
+def _mps_env(args, gpus: list[str]) -> dict | None:
+  """The GPU workers' MPS environment where --mps wants a daemon (train.study.mps), started here and
+  stopped at exit; None without. OSError where `--mps on` cannot start one (auto: a note, then none)."""
+  mode = getattr(args, "mps", "auto")
+  if not mps.wanted(mode, args.slots_per_gpu, gpus):
+    return None
+  try:
+    daemon = mps.start()
+  except OSError as e:
+    if mode == "on":
+      raise
+    print(f"note: no CUDA MPS ({e}); the runs sharing a GPU take turns on it", flush=True)
+    return None
+  atexit.register(daemon.stop)  # after the cluster's close (train.study.executor), at any exit but SIGKILL
+  print(f"CUDA MPS for {args.slots_per_gpu} runs a GPU, each at most {mps.SM_SHARE} % of its multiprocessors",
+        flush=True)
+  return daemon.client_env()
+
+
 def make_client(args):
   """(Dask client, the worker kinds it has) from the cluster options (add_cluster_args): of an
   existing cluster, or of one started here on the given GPUs (default all) and CPU slots (default 1
@@ -116,5 +144,5 @@ def make_client(args):
   cpu = args.cpu_slots if args.cpu_slots is not None else (0 if chosen else 1)
   if args.slots_per_gpu < 1 or cpu < 0:
     raise ValueError("--slots-per-gpu must be >= 1 and --cpu-slots >= 0")
-  client = Client(local_cluster(worker_specs(chosen, args.slots_per_gpu, cpu)))
+  client = Client(local_cluster(worker_specs(chosen, args.slots_per_gpu, cpu, _mps_env(args, chosen))))
   return client, tuple(k for k, n in (("gpu", len(chosen)), ("cpu", cpu)) if n)
