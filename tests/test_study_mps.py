@@ -42,6 +42,8 @@ def test_mps_is_wanted_where_runs_share_a_gpu_and_its_control_program_is_there(c
   assert not mps.wanted("auto", 1, ["0"]) and not mps.wanted("auto", 2, []) and not mps.wanted("off", 4, ["0"])
   with pytest.raises(ValueError, match="--mps takes one of auto, on, off, got 'yes'"):
     mps.wanted("yes", 2, ["0"])
+  with pytest.raises(ValueError, match="--mps on: this cluster has no GPU"):
+    mps.wanted("on", 2, [])
   with pytest.raises(SystemExit):
     _args("yes")
   monkeypatch.setenv("PATH", "/nonexistent")
@@ -78,3 +80,26 @@ def test_a_daemon_that_cannot_start_is_refused_under_on_and_noted_under_auto(con
   assert "note: no CUDA MPS" in capsys.readouterr().out
   assert cluster._mps_env(_args("auto", slots=1), ["0"]) is None and len(control.read_text().splitlines()) == 2  # noqa: SLF001
   assert len(made) == 2 and not any(os.path.exists(d) for d in made)  # a failed start leaves no folder
+
+
+def test_auto_uses_the_daemon_only_where_a_cuda_context_goes_through_it(control, monkeypatch, capsys):
+  """This machine has no CUDA driver: the probe's context fails, so the daemon is stopped again and
+  auto goes on without it (on refuses); where the probe passes, the workers get its environment and
+  the daemon is stopped at exit."""
+  daemon = mps.start()
+  assert "a CUDA context through it failed (OSError: libcuda.so.1" in mps.client_error(daemon, "0")
+  daemon.stop()
+  assert cluster._mps_env(_args("auto"), ["0"]) is None  # noqa: SLF001
+  assert "note: no CUDA MPS (nvidia-cuda-mps-control: a CUDA context through it failed" in capsys.readouterr().out
+  assert control.read_text().splitlines()[-1].endswith("stdin=quit")
+  with pytest.raises(OSError, match="a CUDA context through it failed"):
+    cluster._mps_env(_args("on"), ["0"])  # noqa: SLF001
+  at_exit = []
+  monkeypatch.setattr(mps, "client_error", lambda daemon, gpu: None)
+  monkeypatch.setattr(cluster.atexit, "register", at_exit.append)
+  env = cluster._mps_env(_args("auto"), ["0"])  # noqa: SLF001
+  assert env["CUDA_MPS_ACTIVE_THREAD_PERCENTAGE"] == "85" and os.path.isdir(env["CUDA_MPS_PIPE_DIRECTORY"])
+  assert "CUDA MPS for 2 runs a GPU, each at most 85 %" in capsys.readouterr().out
+  (stop,) = at_exit
+  stop()
+  assert not os.path.exists(env["CUDA_MPS_PIPE_DIRECTORY"])

@@ -119,6 +119,10 @@ def _mps_env(args, gpus: list[str]) -> dict | None:
     return None
   try:
     daemon = mps.start()
+    error = mps.client_error(daemon, gpus[0])
+    if error:
+      daemon.stop()
+      raise OSError(f"{mps.CONTROL}: {error}")
   except OSError as e:
     if mode == "on":
       raise

@@ -19,6 +19,7 @@ import dataclasses
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 
 CONTROL = "nvidia-cuda-mps-control"  # the daemon's control program (NVIDIA's driver utilities)
@@ -55,13 +56,41 @@ class Mps:
 
 
 def wanted(mode: str, slots_per_gpu: int, gpus: list[str]) -> bool:
-  """Whether to start MPS: `on` always, `auto` where runs share a GPU (slots_per_gpu > 1) and the
-  control program is installed; ValueError for another mode."""
+  """Whether to start MPS: `on` wherever there are GPUs, `auto` where runs share one (slots_per_gpu
+  > 1) and the control program is installed; ValueError for another mode, or `on` without a GPU."""
   if mode not in MODES:
     raise ValueError(f"--mps takes one of {', '.join(MODES)}, got {mode!r}")
+  if mode == "on" and not gpus:
+    raise ValueError("--mps on: this cluster has no GPU")
   if mode == "off" or not gpus:
     return False
   return mode == "on" or (slots_per_gpu > 1 and shutil.which(CONTROL) is not None)
+
+
+# a CUDA context through the daemon, made by the driver API alone (no JAX: ~1 s); exit 0 where the
+# MPS server took the client, else 1 with the failing call and CUDA's error code on its last line
+_CLIENT_PROBE = """import ctypes, sys
+cuda = ctypes.CDLL("libcuda.so.1")
+dev, ctx = ctypes.c_int(), ctypes.c_void_p()
+for name, call in (("cuInit", lambda: cuda.cuInit(0)), ("cuDeviceGet", lambda: cuda.cuDeviceGet(ctypes.byref(dev), 0)),
+                   ("cuDevicePrimaryCtxRetain", lambda: cuda.cuDevicePrimaryCtxRetain(ctypes.byref(ctx), dev))):
+  code = call()
+  if code:
+    sys.exit(f"{name}: CUDA error {code}")
+cuda.cuDevicePrimaryCtxRelease(dev)
+"""
+
+
+def client_error(mps: "Mps", gpu: str) -> str | None:
+  """Why a process on GPU `gpu` cannot run through the daemon (some hosts' sandboxes have no MPS
+  server), or None where it can."""
+  env = {**mps._env(), "CUDA_VISIBLE_DEVICES": gpu}  # noqa: SLF001
+  try:
+    done = subprocess.run([sys.executable, "-c", _CLIENT_PROBE], env=env, capture_output=True, text=True, timeout=60)
+  except subprocess.TimeoutExpired:
+    return "a CUDA context through it took over 60 s"
+  said = (done.stderr.strip().splitlines() or ["no message"])[-1]
+  return None if done.returncode == 0 else f"a CUDA context through it failed ({said[:200]})"
 
 
 def start() -> Mps:
