@@ -41,6 +41,11 @@ VARIANTS = {  # name -> XLA_FLAGS added to the environment's
     # or of physics substeps becomes one graph launch instead of a launch per kernel), and none at all
     "cmdbuf-while": "--xla_gpu_enable_command_buffer=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE",
     "cmdbuf-off": "--xla_gpu_enable_command_buffer=",
+    # XLA's autotuning results written to a file by one process and read by the next (its own empty
+    # compilation cache, so JAX's per-fusion autotune cache inside it is empty too): what the compilation
+    # costs where autotuning results come with the program, the training speed kept. Run in this order.
+    "autotune-dump": "--xla_gpu_dump_autotune_results_to={work}/autotune-results.txt",
+    "autotune-load": "--xla_gpu_load_autotune_results_from={work}/autotune-results.txt",
 }
 
 
@@ -55,6 +60,7 @@ def _longest(log: str, n: int = 10) -> list[list]:
 
 
 def _variant(name: str, flags: str, args, work: str) -> dict:
+  flags = flags.format(work=work)
   env = {**os.environ, "MJX_TRACKS_CACHE": f"{work}/{name}-cache", "MJX_TRACKS_COMPILE_LOG": f"{work}/{name}.compile.log",
          "XLA_FLAGS": " ".join(x for x in (os.environ.get("XLA_FLAGS", ""), flags) if x)}
   run = f"{work}/{name}-run"
