@@ -1,6 +1,7 @@
 """CUDA MPS for runs sharing a GPU (train.study.mps), against a stand-in for NVIDIA's control program
-that records how it was called: the study's own daemon (a fresh pipe directory), its clients' environment
-in the GPU workers only, its stop, and a clear refusal where it cannot start."""
+that records how it was called and writes the daemon's log as the real one does: the study's own daemon
+(a fresh pipe directory), its clients' environment in the GPU workers only, its stop, the probe that
+a CUDA context went through it, and a clear refusal or note where it cannot be had."""
 
 import argparse
 import os
@@ -10,11 +11,15 @@ import pytest
 
 from train.study import cluster, mps
 
+# -d: the daemon's log names the client FAKE_MPS_CLIENT (the real one: "NEW CLIENT <pid> from user 0")
 FAKE = """#!/bin/sh
 echo "args=$* pipe=$CUDA_MPS_PIPE_DIRECTORY log=$CUDA_MPS_LOG_DIRECTORY stdin=$(cat)" >> "$FAKE_MPS_LOG"
-echo "$FAKE_MPS_SAYS" >&2
+echo "$FAKE_MPS_SAYS"
+if [ "$1" = "-d" ]; then echo "[x Control 1] Starting control daemon" > "$CUDA_MPS_LOG_DIRECTORY/control.log"; fi
 exit ${FAKE_MPS_RC:-0}
 """
+PROBE_PASSES = "import sys, os; log = os.environ['CUDA_MPS_LOG_DIRECTORY'] + '/control.log'; " \
+               "open(log, 'a').write(f'NEW CLIENT {os.getpid()} from user 0\\n') if sys.argv[1] == 'served' else None"
 
 
 @pytest.fixture
@@ -31,13 +36,13 @@ def control(tmp_path, monkeypatch):
   return log
 
 
-def _args(mode: str, slots: int = 2) -> argparse.Namespace:
+def _args(*argv: str) -> argparse.Namespace:
   p = argparse.ArgumentParser()
   cluster.add_cluster_args(p)
-  return p.parse_args(["--mps", mode, "--slots-per-gpu", str(slots)])
+  return p.parse_args(["--slots-per-gpu", "2", *argv])
 
 
-def test_mps_is_wanted_where_runs_share_a_gpu_and_its_control_program_is_there(control, monkeypatch):
+def test_mps_is_wanted_where_runs_share_a_gpu_and_its_control_program_is_there(control, monkeypatch, capsys):
   assert mps.wanted("auto", 2, ["0"]) and mps.wanted("on", 1, ["0"])
   assert not mps.wanted("auto", 1, ["0"]) and not mps.wanted("auto", 2, []) and not mps.wanted("off", 4, ["0"])
   with pytest.raises(ValueError, match="--mps takes one of auto, on, off, got 'yes'"):
@@ -45,16 +50,20 @@ def test_mps_is_wanted_where_runs_share_a_gpu_and_its_control_program_is_there(c
   with pytest.raises(ValueError, match="--mps on: this cluster has no GPU"):
     mps.wanted("on", 2, [])
   with pytest.raises(SystemExit):
-    _args("yes")
+    _args("--mps", "yes")
+  with pytest.raises(ValueError, match="--mps on starts MPS for the workers started here"):
+    cluster.make_client(_args("--mps", "on", "--scheduler", "tcp://127.0.0.1:1"))
   monkeypatch.setenv("PATH", "/nonexistent")
   assert not mps.wanted("auto", 2, ["0"])
+  assert cluster._mps(_args(), ["0"]) is None  # noqa: SLF001
+  assert "note: nvidia-cuda-mps-control is not installed: the runs sharing a GPU take turns" in capsys.readouterr().out
   with pytest.raises(OSError, match="nvidia-cuda-mps-control is not installed"):
     mps.start()
 
 
 def test_the_daemon_is_the_studys_own_and_only_the_gpu_workers_runs_use_it(control):
   daemon = mps.start()
-  assert os.path.basename(daemon.pipe_dir).startswith("mjx-tracks-mps-") and os.path.isdir(daemon.log_dir)
+  assert os.path.dirname(daemon.pipe_dir) == "/tmp" and os.path.basename(daemon.pipe_dir).startswith("mjx-tracks-mps-")
   assert control.read_text().splitlines() == [f"args=-d pipe={daemon.pipe_dir} log={daemon.log_dir} stdin="]
   env = daemon.client_env()
   assert env == {"CUDA_MPS_PIPE_DIRECTORY": daemon.pipe_dir, "CUDA_MPS_LOG_DIRECTORY": daemon.log_dir,
@@ -74,32 +83,58 @@ def test_a_daemon_that_cannot_start_is_refused_under_on_and_noted_under_auto(con
   monkeypatch.setattr(mps.tempfile, "mkdtemp", lambda **kw: made.append(mkdtemp(**kw)) or made[-1])
   monkeypatch.setenv("FAKE_MPS_RC", "1")
   monkeypatch.setenv("FAKE_MPS_SAYS", "An instance of this daemon is already running")
-  with pytest.raises(OSError, match=r"-d failed \(1\): An instance of this daemon is already running"):
-    cluster._mps_env(_args("on"), ["0"])  # noqa: SLF001
-  assert cluster._mps_env(_args("auto"), ["0"]) is None  # noqa: SLF001
+  with pytest.raises(OSError, match=r"-d failed \(1\): An instance of this daemon is already running; "
+                                    r"\[x Control 1\] Starting control daemon"):
+    cluster._mps(_args("--mps", "on"), ["0"])  # noqa: SLF001
+  assert cluster._mps(_args(), ["0"]) is None  # noqa: SLF001
   assert "note: no CUDA MPS" in capsys.readouterr().out
-  assert cluster._mps_env(_args("auto", slots=1), ["0"]) is None and len(control.read_text().splitlines()) == 2  # noqa: SLF001
+  assert cluster._mps(_args("--slots-per-gpu", "1"), ["0"]) is None and len(control.read_text().splitlines()) == 2  # noqa: SLF001
   assert len(made) == 2 and not any(os.path.exists(d) for d in made)  # a failed start leaves no folder
 
 
-def test_auto_uses_the_daemon_only_where_a_cuda_context_goes_through_it(control, monkeypatch, capsys):
-  """This machine has no CUDA driver: the probe's context fails, so the daemon is stopped again and
-  auto goes on without it (on refuses); where the probe passes, the workers get its environment and
-  the daemon is stopped at exit."""
-  daemon = mps.start()
-  assert "a CUDA context through it failed (OSError: libcuda.so.1" in mps.client_error(daemon, "0")
-  daemon.stop()
-  assert cluster._mps_env(_args("auto"), ["0"]) is None  # noqa: SLF001
-  assert "note: no CUDA MPS (nvidia-cuda-mps-control: a CUDA context through it failed" in capsys.readouterr().out
-  assert control.read_text().splitlines()[-1].endswith("stdin=quit")
-  with pytest.raises(OSError, match="a CUDA context through it failed"):
-    cluster._mps_env(_args("on"), ["0"])  # noqa: SLF001
+@pytest.mark.parametrize("probe, served, error", [
+    (None, "", "a CUDA context through it failed (OSError: no-such-libcuda.so"),  # the real probe, no driver
+    (PROBE_PASSES, "unserved", "the probe's CUDA context did not go through it (its log: [x Control 1] Starting"),
+    (PROBE_PASSES, "served", None)])
+def test_the_daemon_is_used_only_where_a_probes_cuda_context_went_through_it(control, monkeypatch, capsys, probe,
+                                                                            served, error):
+  """A CUDA process that cannot reach the daemon runs without it: the probe must also be the daemon's
+  logged client. Where it is not, the daemon is stopped again and auto goes on without it (on refuses);
+  where it is, the workers get its environment, and at exit the cluster closes before it stops."""
+  monkeypatch.setattr(mps, "CUDA_LIBRARY", served or "no-such-libcuda.so")
+  if probe:
+    monkeypatch.setattr(mps, "_CLIENT_PROBE", probe)
   at_exit = []
-  monkeypatch.setattr(mps, "client_error", lambda daemon, gpu: None)
   monkeypatch.setattr(cluster.atexit, "register", at_exit.append)
-  env = cluster._mps_env(_args("auto"), ["0"])  # noqa: SLF001
-  assert env["CUDA_MPS_ACTIVE_THREAD_PERCENTAGE"] == "85" and os.path.isdir(env["CUDA_MPS_PIPE_DIRECTORY"])
-  assert "CUDA MPS for 2 runs a GPU, each at most 85 %" in capsys.readouterr().out
-  (stop,) = at_exit
+  monkeypatch.setattr(cluster.atexit, "unregister", at_exit.remove)
+  if not error:
+    _the_cluster_started_here_closes_before_its_daemon_stops(monkeypatch, at_exit, capsys)
+    return
+  assert cluster._mps(_args(), ["0"]) is None and not at_exit  # noqa: SLF001
+  assert f"note: no CUDA MPS (nvidia-cuda-mps-control: {error}" in capsys.readouterr().out
+  assert control.read_text().splitlines()[-1].endswith("stdin=quit")
+  with pytest.raises(OSError, match=error.replace("(", r"\(").replace("[", r"\[")):
+    cluster._mps(_args("--mps", "on"), ["0"])  # noqa: SLF001
+
+
+def _the_cluster_started_here_closes_before_its_daemon_stops(monkeypatch, at_exit, capsys):
+  """make_client on GPU 0 (Dask's cluster and client stood in for): the GPU worker's runs get the
+  daemon's environment, and exit handlers (run last first) close the cluster, then stop the daemon."""
+  import distributed
+
+  class Cluster:
+    def __init__(self, specs):
+      self.specs = specs
+
+    def close(self):
+      pass
+  monkeypatch.setattr(cluster, "local_cluster", Cluster)
+  monkeypatch.setattr(distributed, "Client", lambda c: c)
+  made, kinds = cluster.make_client(_args("--gpus", "0"))
+  assert kinds == ("gpu",) and "CUDA MPS for 2 runs a GPU, each at most 85 %" in capsys.readouterr().out
+  stop, close = at_exit
+  daemon = stop.__self__
+  assert close == made.close and stop == daemon.stop
+  assert made.specs["gpu0"]["options"]["env"]["CUDA_MPS_PIPE_DIRECTORY"] == daemon.pipe_dir
   stop()
-  assert not os.path.exists(env["CUDA_MPS_PIPE_DIRECTORY"])
+  assert not os.path.exists(daemon.pipe_dir)

@@ -24,8 +24,9 @@
 # checkpoints stay on the machine; a pack's ended runs' policies and records come back, above).
 # Programs side by side on one GPU time-slice it (8 SAC packs at once: each 14x slower than alone;
 # two 5-seed PPO packs: nothing finished in 18 min). With SLOTS_PER_GPU > 1 the study starts CUDA MPS
-# (--mps auto; train.study.mps): the paper study's SAC pack beside its PPO pack then trains at ~0.55x
-# its rate alone instead of 0.19x (results/speed/group/paper-packed-mps-1-H200-2026-11-28.md).
+# (--mps auto; train.study.mps): the paper study's SAC pack beside its PPO pack then trained at
+# 0.54-0.62x its rate alone instead of 0.19x (PPO capped: results/speed/group/paper-packed-mps-1-H200-
+# 2026-11-28.md). Where the study notes "no CUDA MPS", keep SLOTS_PER_GPU=1 unless runs are tiny.
 set -uo pipefail
 export PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 export XLA_FLAGS="--xla_cpu_multi_thread_eigen=false"  # many one-robot CPU runs side by side: one thread each

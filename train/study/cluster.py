@@ -47,7 +47,8 @@ def add_cluster_args(p: argparse.ArgumentParser) -> None:
   p.add_argument("--cpu-slots", type=int, help="runs at once on the CPU backend (default: 1 without GPUs, else 0)")
   p.add_argument("--mps", default="auto", choices=mps.MODES,
                  help="CUDA MPS for runs sharing a GPU, each kept to %d %% of its multiprocessors (default auto: "
-                      "where --slots-per-gpu > 1 and nvidia-cuda-mps-control is installed)" % mps.SM_SHARE)
+                      "where --slots-per-gpu > 1, nvidia-cuda-mps-control is installed and a probe's CUDA context "
+                      "goes through it; else a note, and the runs take turns on the GPU)" % mps.SM_SHARE)
 
 
 def _nanny(slots: int, kind: str, env: dict, cls) -> dict:
@@ -111,16 +112,22 @@ def remote_security(address: str, ca: str | None, cert: str | None, key: str | N
   return None
 
 
-def _mps_env(args, gpus: list[str]) -> dict | None:
-  """The GPU workers' MPS environment where --mps wants a daemon (train.study.mps), started here and
-  stopped at exit; None without. OSError where `--mps on` cannot start one (auto: a note, then none)."""
+def _mps(args, gpus: list[str]) -> mps.Mps | None:
+  """The daemon the GPU workers' runs go through where --mps wants one (train.study.mps), started here
+  and stopped at exit; None without (auto: with a note where runs share a GPU). OSError where `--mps
+  on` cannot have one."""
   mode = getattr(args, "mps", "auto")
+  if mode == "auto" and args.slots_per_gpu > 1 and gpus and not mps.installed():
+    print(f"note: {mps.CONTROL} is not installed: the runs sharing a GPU take turns on it", flush=True)
+    return None
   if not mps.wanted(mode, args.slots_per_gpu, gpus):
     return None
   try:
     daemon = mps.start()
+    atexit.register(daemon.stop)  # at any exit that runs Python's exit handlers (not SIGKILL, SIGHUP)
     error = mps.client_error(daemon, gpus[0])
     if error:
+      atexit.unregister(daemon.stop)
       daemon.stop()
       raise OSError(f"{mps.CONTROL}: {error}")
   except OSError as e:
@@ -128,10 +135,9 @@ def _mps_env(args, gpus: list[str]) -> dict | None:
       raise
     print(f"note: no CUDA MPS ({e}); the runs sharing a GPU take turns on it", flush=True)
     return None
-  atexit.register(daemon.stop)  # after the cluster's close (train.study.executor), at any exit but SIGKILL
   print(f"CUDA MPS for {args.slots_per_gpu} runs a GPU, each at most {mps.SM_SHARE} % of its multiprocessors",
         flush=True)
-  return daemon.client_env()
+  return daemon
 
 
 def make_client(args):
@@ -140,6 +146,8 @@ def make_client(args):
   without GPUs, else 0); ValueError on bad counts or an unprotected remote address."""
   from distributed import Client  # noqa: PLC0415
   if args.scheduler:
+    if getattr(args, "mps", "auto") == "on":
+      raise ValueError("--mps on starts MPS for the workers started here, not those of --scheduler")
     security = remote_security(args.scheduler, args.tls_ca_file, args.tls_cert, args.tls_key)
     client = Client(args.scheduler, security=security, timeout=30)
     kinds = {k for w in client.scheduler_info()["workers"].values() for k in w.get("resources", {})}
@@ -148,5 +156,9 @@ def make_client(args):
   cpu = args.cpu_slots if args.cpu_slots is not None else (0 if chosen else 1)
   if args.slots_per_gpu < 1 or cpu < 0:
     raise ValueError("--slots-per-gpu must be >= 1 and --cpu-slots >= 0")
-  client = Client(local_cluster(worker_specs(chosen, args.slots_per_gpu, cpu, _mps_env(args, chosen))))
+  daemon = _mps(args, chosen)
+  cluster = local_cluster(worker_specs(chosen, args.slots_per_gpu, cpu, daemon.client_env() if daemon else None))
+  if daemon:
+    atexit.register(cluster.close)  # exit handlers run last first: the workers end, then the daemon quits
+  client = Client(cluster)
   return client, tuple(k for k, n in (("gpu", len(chosen)), ("cpu", cpu)) if n)

@@ -6,11 +6,13 @@ at 0.19x its rate alone. Under MPS their kernels run at once; with each process 
 the GPU's multiprocessors (CUDA_MPS_ACTIVE_THREAD_PERCENTAGE), a large program leaves the rest free
 for the small one's kernels (results/speed/group/paper-packed-mps-1-H200-2026-11-28.md).
 
-The control daemon started here is this study's own: its pipe directory is a fresh temporary folder,
-and only the processes given `client_env()` connect to it. It changes no setting of the GPU. The cost
-(NVIDIA's MPS documentation, "Error Containment"): a fatal GPU fault of one run (an illegal memory
-access, not an out-of-memory error) reaches every run on that GPU, and the daemon takes no new run
-until they have all exited; the study records them failed and retries them (its `retries`).
+The control daemon started here is this study's own: its pipe directory is a fresh folder under
+/tmp (a Unix socket's path has at most 108 bytes), and only the processes given `client_env()`
+connect to it. It changes no setting of the GPU. A CUDA process that cannot reach the daemon runs
+without MPS, silently (NVIDIA's manual), so `client_error` checks that the daemon logged a probe's
+context. The cost (NVIDIA's MPS documentation, "Error Containment"): a fatal GPU fault of one run (an
+illegal memory access, not an out-of-memory error) reaches every run on that GPU, and the daemon
+takes no new run until they have all exited; the study records them failed and retries them.
 """
 
 from __future__ import annotations
@@ -18,17 +20,20 @@ from __future__ import annotations
 import dataclasses
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
 
 CONTROL = "nvidia-cuda-mps-control"  # the daemon's control program (NVIDIA's driver utilities)
+CUDA_LIBRARY = "libcuda.so.1"  # the CUDA driver the probe loads
 # % of a GPU's multiprocessors one process may use under MPS. One H200, the paper study's PPO program
 # (20 runs) beside its SAC program (40 one-robot runs), per-run training steps/s against each alone
-# (6,230 / ~37): time-sliced 0.77x / 0.19x; MPS with no share 0.92x / 0.2x; PPO at 85 % 0.88x / 0.55x;
-# PPO at 60 % 0.71x / 0.65x (results/speed/group/paper-packed-mps-1-H200-2026-11-28.md)
+# (6,230 / ~37): time-sliced 0.77x / 0.19x; MPS with no share 0.92x / 0.22x; PPO at 85 % 0.87-0.89x /
+# 0.54-0.62x; PPO at 60 % 0.70-0.71x / 0.59-0.76x (SAC uncapped; results/speed/group/
+# paper-packed-mps-1-H200-2026-11-28.md)
 SM_SHARE = 85
-MODES = ("auto", "on", "off")  # --mps: auto starts it where runs share a GPU and CONTROL exists
+MODES = ("auto", "on", "off")  # --mps: auto starts it where runs share a GPU, CONTROL exists and a probe passes
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,12 +48,28 @@ class Mps:
     return {"CUDA_MPS_PIPE_DIRECTORY": self.pipe_dir, "CUDA_MPS_LOG_DIRECTORY": self.log_dir,
             "CUDA_MPS_ACTIVE_THREAD_PERCENTAGE": str(share)}
 
-  def stop(self) -> None:
-    """Asks the daemon to quit (it ends its server once its clients are gone); never raises."""
+  def log_tail(self, lines: int = 3) -> str:
+    """The last lines of the daemon's own log (why it refused something), or ''."""
     try:
-      subprocess.run([CONTROL], input="quit\n", text=True, env=self._env(), capture_output=True, timeout=30)
+      with open(os.path.join(self.log_dir, "control.log"), errors="replace") as f:
+        return " | ".join(line.strip() for line in f.read().splitlines()[-lines:])
+    except OSError:
+      return ""
+
+  def stop(self) -> None:
+    """Asks the daemon to quit, and ends it (SIGTERM to its pid file's process) where that failed or
+    took over 30 s (a client still connected); then removes its folder. Never raises."""
+    try:
+      quit_ok = subprocess.run([CONTROL], input="quit\n", text=True, env=self._env(), capture_output=True,
+                               timeout=30).returncode == 0
     except (OSError, subprocess.TimeoutExpired):
-      pass
+      quit_ok = False
+    if not quit_ok:
+      try:
+        with open(os.path.join(self.pipe_dir, "nvidia-cuda-mps-control.pid")) as f:
+          os.kill(int(f.read().strip()), signal.SIGTERM)
+      except (OSError, ValueError):
+        pass  # no daemon
     shutil.rmtree(self.pipe_dir, ignore_errors=True)
 
   def _env(self) -> dict[str, str]:
@@ -64,13 +85,17 @@ def wanted(mode: str, slots_per_gpu: int, gpus: list[str]) -> bool:
     raise ValueError("--mps on: this cluster has no GPU")
   if mode == "off" or not gpus:
     return False
-  return mode == "on" or (slots_per_gpu > 1 and shutil.which(CONTROL) is not None)
+  return mode == "on" or (slots_per_gpu > 1 and installed())
 
 
-# a CUDA context through the daemon, made by the driver API alone (no JAX: ~1 s); exit 0 where the
-# MPS server took the client, else 1 with the failing call and CUDA's error code on its last line
+def installed() -> bool:
+  return shutil.which(CONTROL) is not None
+
+
+# a CUDA context through the daemon, made by the driver API alone (no JAX); exit 0 where the driver
+# made it, else 1 with the failing call and CUDA's error code on its last line
 _CLIENT_PROBE = """import ctypes, sys
-cuda = ctypes.CDLL("libcuda.so.1")
+cuda = ctypes.CDLL(sys.argv[1])
 dev, ctx = ctypes.c_int(), ctypes.c_void_p()
 for name, call in (("cuInit", lambda: cuda.cuInit(0)), ("cuDeviceGet", lambda: cuda.cuDeviceGet(ctypes.byref(dev), 0)),
                    ("cuDevicePrimaryCtxRetain", lambda: cuda.cuDevicePrimaryCtxRetain(ctypes.byref(ctx), dev))):
@@ -81,29 +106,51 @@ cuda.cuDevicePrimaryCtxRelease(dev)
 """
 
 
-def client_error(mps: "Mps", gpu: str) -> str | None:
-  """Why a process on GPU `gpu` cannot run through the daemon (some hosts' sandboxes have no MPS
-  server), or None where it can."""
+def client_error(mps: Mps, gpu: str) -> str | None:
+  """Why a process on GPU `gpu` would not run through the daemon (some hosts' sandboxes have no MPS
+  server; a CUDA process that cannot reach it runs without MPS), or None where a probe's context went
+  through it: the driver made the context and the daemon logged the probe as its client."""
   env = {**mps._env(), "CUDA_VISIBLE_DEVICES": gpu}  # noqa: SLF001
   try:
-    done = subprocess.run([sys.executable, "-c", _CLIENT_PROBE], env=env, capture_output=True, text=True, timeout=60)
+    done = subprocess.Popen([sys.executable, "-c", _CLIENT_PROBE, CUDA_LIBRARY], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    _, err = done.communicate(timeout=60)
   except subprocess.TimeoutExpired:
+    done.kill()
     return "a CUDA context through it took over 60 s"
-  said = (done.stderr.strip().splitlines() or ["no message"])[-1]
-  return None if done.returncode == 0 else f"a CUDA context through it failed ({said[:200]})"
+  if done.returncode != 0:
+    return f"a CUDA context through it failed ({(err.strip().splitlines() or ['no message'])[-1][:200]})"
+  if f"NEW CLIENT {done.pid} " not in _log(mps):
+    return f"the probe's CUDA context did not go through it (its log: {mps.log_tail() or 'empty'})"
+  return None
+
+
+def _log(mps: Mps) -> str:
+  try:
+    with open(os.path.join(mps.log_dir, "control.log"), errors="replace") as f:
+      return f.read()
+  except OSError:
+    return ""
 
 
 def start() -> Mps:
   """Starts a control daemon of its own (a fresh pipe directory); OSError with the reason where it
-  cannot (no control program, or it refused to start)."""
-  if shutil.which(CONTROL) is None:
-    raise OSError(f"--mps on: {CONTROL} is not installed (NVIDIA's driver utilities)")
-  pipe_dir = tempfile.mkdtemp(prefix="mjx-tracks-mps-")
+  cannot (no control program, or it refused to start or hung)."""
+  if not installed():
+    raise OSError(f"{CONTROL} is not installed (NVIDIA's driver utilities)")
+  pipe_dir = tempfile.mkdtemp(prefix="mjx-tracks-mps-", dir="/tmp")
   mps = Mps(pipe_dir, os.path.join(pipe_dir, "log"))
   os.makedirs(mps.log_dir)
-  done = subprocess.run([CONTROL, "-d"], env=mps._env(), stdin=subprocess.DEVNULL, capture_output=True, text=True,  # noqa: SLF001
-                        timeout=60)
-  if done.returncode != 0:
+  said = os.path.join(pipe_dir, "start.out")  # a file, not a pipe: the forked daemon may keep its output open
+  try:
+    with open(said, "w") as out:
+      rc = subprocess.run([CONTROL, "-d"], env=mps._env(), stdin=subprocess.DEVNULL, stdout=out, stderr=out,  # noqa: SLF001
+                          timeout=60).returncode
+    message = open(said, errors="replace").read().strip()[:200]
+  except subprocess.TimeoutExpired:
+    rc, message = None, "no answer in 60 s"
+  if rc != 0:
+    why = "; ".join(x for x in (message, mps.log_tail()) if x)
     shutil.rmtree(pipe_dir, ignore_errors=True)
-    raise OSError(f"{CONTROL} -d failed ({done.returncode}): {(done.stderr or done.stdout).strip()[:200]}")
+    raise OSError(f"{CONTROL} -d failed ({rc}): {why}")
   return mps
