@@ -54,9 +54,9 @@ def test_mps_is_wanted_where_runs_share_a_gpu_and_its_control_program_is_there(c
   with pytest.raises(ValueError, match="--mps on starts MPS for the workers started here"):
     cluster.make_client(_args("--mps", "on", "--scheduler", "tcp://127.0.0.1:1"))
   monkeypatch.setenv("PATH", "/nonexistent")
-  assert not mps.wanted("auto", 2, ["0"])
   assert cluster._mps(_args(), ["0"]) is None  # noqa: SLF001
-  assert "note: nvidia-cuda-mps-control is not installed: the runs sharing a GPU take turns" in capsys.readouterr().out
+  assert ("note: no CUDA MPS (nvidia-cuda-mps-control is not installed (NVIDIA's driver utilities)); the runs "
+          "sharing a GPU take turns on it") in capsys.readouterr().out
   with pytest.raises(OSError, match="nvidia-cuda-mps-control is not installed"):
     mps.start()
 

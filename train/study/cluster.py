@@ -63,8 +63,8 @@ def worker_specs(gpus: list[str], slots_per_gpu: int, cpu_slots: int, gpu_env: d
   from distributed import Nanny  # noqa: PLC0415
   # runs sharing a GPU split its memory (JAX takes 75 % of it per process by default)
   share = {"XLA_PYTHON_CLIENT_MEM_FRACTION": f"{0.9 / slots_per_gpu:.2f}"} if slots_per_gpu > 1 else {}
-  share = {**share, **(gpu_env or {})}
-  specs = {f"gpu{g}": _nanny(slots_per_gpu, "gpu", {"CUDA_VISIBLE_DEVICES": g, **share}, Nanny) for g in gpus}
+  env = {**share, **(gpu_env or {})}
+  specs = {f"gpu{g}": _nanny(slots_per_gpu, "gpu", {"CUDA_VISIBLE_DEVICES": g, **env}, Nanny) for g in gpus}
   if cpu_slots:
     specs["cpu"] = _nanny(cpu_slots, "cpu", {"JAX_PLATFORMS": "cpu", "CUDA_VISIBLE_DEVICES": ""}, Nanny)
   return specs
@@ -117,9 +117,6 @@ def _mps(args, gpus: list[str]) -> mps.Mps | None:
   and stopped at exit; None without (auto: with a note where runs share a GPU). OSError where `--mps
   on` cannot have one."""
   mode = getattr(args, "mps", "auto")
-  if mode == "auto" and args.slots_per_gpu > 1 and gpus and not mps.installed():
-    print(f"note: {mps.CONTROL} is not installed: the runs sharing a GPU take turns on it", flush=True)
-    return None
   if not mps.wanted(mode, args.slots_per_gpu, gpus):
     return None
   try:

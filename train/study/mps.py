@@ -33,7 +33,7 @@ CUDA_LIBRARY = "libcuda.so.1"  # the CUDA driver the probe loads
 # 0.54-0.62x; PPO at 60 % 0.70-0.71x / 0.59-0.76x (SAC uncapped; results/speed/group/
 # paper-packed-mps-1-H200-2026-11-28.md)
 SM_SHARE = 85
-MODES = ("auto", "on", "off")  # --mps: auto starts it where runs share a GPU, CONTROL exists and a probe passes
+MODES = ("auto", "on", "off")  # --mps: auto tries it where runs share a GPU (a note where it cannot be had)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,13 +48,16 @@ class Mps:
     return {"CUDA_MPS_PIPE_DIRECTORY": self.pipe_dir, "CUDA_MPS_LOG_DIRECTORY": self.log_dir,
             "CUDA_MPS_ACTIVE_THREAD_PERCENTAGE": str(share)}
 
-  def log_tail(self, lines: int = 3) -> str:
-    """The last lines of the daemon's own log (why it refused something), or ''."""
+  def log(self) -> str:
+    """The daemon's own log (its clients, why it refused something), or ''."""
     try:
       with open(os.path.join(self.log_dir, "control.log"), errors="replace") as f:
-        return " | ".join(line.strip() for line in f.read().splitlines()[-lines:])
+        return f.read()
     except OSError:
       return ""
+
+  def log_tail(self, lines: int = 3) -> str:
+    return " | ".join(line.strip() for line in self.log().splitlines()[-lines:])
 
   def stop(self) -> None:
     """Asks the daemon to quit, and ends it (SIGTERM to its pid file's process) where that failed or
@@ -77,19 +80,15 @@ class Mps:
 
 
 def wanted(mode: str, slots_per_gpu: int, gpus: list[str]) -> bool:
-  """Whether to start MPS: `on` wherever there are GPUs, `auto` where runs share one (slots_per_gpu
-  > 1) and the control program is installed; ValueError for another mode, or `on` without a GPU."""
+  """Whether to try MPS: `on` wherever there are GPUs, `auto` where runs share one (slots_per_gpu >
+  1); ValueError for another mode, or `on` without a GPU. (Whether it can be had: start, client_error.)"""
   if mode not in MODES:
     raise ValueError(f"--mps takes one of {', '.join(MODES)}, got {mode!r}")
   if mode == "on" and not gpus:
     raise ValueError("--mps on: this cluster has no GPU")
   if mode == "off" or not gpus:
     return False
-  return mode == "on" or (slots_per_gpu > 1 and installed())
-
-
-def installed() -> bool:
-  return shutil.which(CONTROL) is not None
+  return mode == "on" or slots_per_gpu > 1
 
 
 # a CUDA context through the daemon, made by the driver API alone (no JAX); exit 0 where the driver
@@ -120,23 +119,15 @@ def client_error(mps: Mps, gpu: str) -> str | None:
     return "a CUDA context through it took over 60 s"
   if done.returncode != 0:
     return f"a CUDA context through it failed ({(err.strip().splitlines() or ['no message'])[-1][:200]})"
-  if f"NEW CLIENT {done.pid} " not in _log(mps):
+  if f"NEW CLIENT {done.pid} " not in mps.log():
     return f"the probe's CUDA context did not go through it (its log: {mps.log_tail() or 'empty'})"
   return None
-
-
-def _log(mps: Mps) -> str:
-  try:
-    with open(os.path.join(mps.log_dir, "control.log"), errors="replace") as f:
-      return f.read()
-  except OSError:
-    return ""
 
 
 def start() -> Mps:
   """Starts a control daemon of its own (a fresh pipe directory); OSError with the reason where it
   cannot (no control program, or it refused to start or hung)."""
-  if not installed():
+  if shutil.which(CONTROL) is None:
     raise OSError(f"{CONTROL} is not installed (NVIDIA's driver utilities)")
   pipe_dir = tempfile.mkdtemp(prefix="mjx-tracks-mps-", dir="/tmp")
   mps = Mps(pipe_dir, os.path.join(pipe_dir, "log"))
