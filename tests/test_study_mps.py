@@ -11,15 +11,28 @@ import pytest
 
 from train.study import cluster, mps
 
-# -d: the daemon's log names the client FAKE_MPS_CLIENT (the real one: "NEW CLIENT <pid> from user 0")
+# -d writes the daemon's log's first line; get_server_list / get_client_list answer as the real one does
+# (one server, 4242, once a client registered in the pipe folder's file `clients`: the real daemon
+# starts its server at its first client)
 FAKE = """#!/bin/sh
-echo "args=$* pipe=$CUDA_MPS_PIPE_DIRECTORY log=$CUDA_MPS_LOG_DIRECTORY stdin=$(cat)" >> "$FAKE_MPS_LOG"
-echo "$FAKE_MPS_SAYS"
+asked=$(cat)
+echo "args=$* pipe=$CUDA_MPS_PIPE_DIRECTORY log=$CUDA_MPS_LOG_DIRECTORY stdin=$asked" >> "$FAKE_MPS_LOG"
+case "$asked" in
+  get_server_list) if [ -f "$CUDA_MPS_PIPE_DIRECTORY/clients" ]; then echo 4242; fi ;;
+  "get_client_list 4242") cat "$CUDA_MPS_PIPE_DIRECTORY/clients" ;;
+  *) echo "$FAKE_MPS_SAYS" ;;
+esac
 if [ "$1" = "-d" ]; then echo "[x Control 1] Starting control daemon" > "$CUDA_MPS_LOG_DIRECTORY/control.log"; fi
 exit ${FAKE_MPS_RC:-0}
 """
-PROBE_PASSES = "import sys, os; log = os.environ['CUDA_MPS_LOG_DIRECTORY'] + '/control.log'; " \
-               "open(log, 'a').write(f'NEW CLIENT {os.getpid()} from user 0\\n') if sys.argv[1] == 'served' else None"
+# a probe whose context the daemon serves (argv[1] == "served": it registers as a client) or not; it
+# holds its context until a line comes on stdin, as the real one does
+PROBE_PASSES = ("import sys, os\n"
+                "if sys.argv[1] == 'served':\n"
+                "  open(os.environ['CUDA_MPS_PIPE_DIRECTORY'] + '/clients', 'a').write(f'{os.getpid()}\\n')\n"
+                "print('ready', flush=True)\n"
+                "sys.stdin.readline()\n")
+PROBE_HANGS = "import time; time.sleep(30)"
 
 
 @pytest.fixture
@@ -94,14 +107,17 @@ def test_a_daemon_that_cannot_start_is_refused_under_on_and_noted_under_auto(con
 
 @pytest.mark.parametrize("probe, served, error", [
     (None, "", "a CUDA context through it failed (OSError: no-such-libcuda.so"),  # the real probe, no driver
-    (PROBE_PASSES, "unserved", "the probe's CUDA context did not go through it (its log: [x Control 1] Starting"),
+    (PROBE_PASSES, "unserved", "the probe's CUDA context did not go through it (the daemon named no such client; "
+                               "its log: [x Control 1] Starting"),
+    (PROBE_HANGS, "", "a CUDA context through it took over 1 s"),
     (PROBE_PASSES, "served", None)])
 def test_the_daemon_is_used_only_where_a_probes_cuda_context_went_through_it(control, monkeypatch, capsys, probe,
                                                                             served, error):
-  """A CUDA process that cannot reach the daemon runs without it: the probe must also be the daemon's
-  logged client. Where it is not, the daemon is stopped again and auto goes on without it (on refuses);
+  """A CUDA process that cannot reach the daemon runs without it: while the probe holds its context,
+  the daemon must name it among its clients. Where it is not, the daemon is stopped again and auto goes on without it (on refuses);
   where it is, the workers get its environment, and at exit the cluster closes before it stops."""
   monkeypatch.setattr(mps, "CUDA_LIBRARY", served or "no-such-libcuda.so")
+  monkeypatch.setattr(mps, "PROBE_TIMEOUT", 1)
   if probe:
     monkeypatch.setattr(mps, "_CLIENT_PROBE", probe)
   at_exit = []

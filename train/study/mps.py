@@ -9,8 +9,8 @@ for the small one's kernels (results/speed/group/paper-packed-mps-1-H200-2026-11
 The control daemon started here is this study's own: its pipe directory is a fresh folder under
 /tmp (a Unix socket's path has at most 108 bytes), and only the processes given `client_env()`
 connect to it. It changes no setting of the GPU. A CUDA process that cannot reach the daemon runs
-without MPS, silently (NVIDIA's manual), so `client_error` checks that the daemon logged a probe's
-context. The cost (NVIDIA's MPS documentation, "Error Containment"): a fatal GPU fault of one run (an
+without MPS, silently (NVIDIA's manual), so `client_error` checks that the daemon names a probe's
+context among its clients. The cost (NVIDIA's MPS documentation, "Error Containment"): a fatal GPU fault of one run (an
 illegal memory access, not an out-of-memory error) reaches every run on that GPU, and the daemon
 takes no new run until they have all exited; the study records them failed and retries them.
 """
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import select
 import shutil
 import signal
 import subprocess
@@ -56,6 +57,20 @@ class Mps:
     except OSError:
       return ""
 
+  def clients(self) -> set[int]:
+    """The pids of the processes whose CUDA contexts go through the daemon now (its answer to
+    get_server_list, then get_client_list for each server), or an empty set where it did not answer."""
+    return {int(pid) for server in self._ask("get_server_list").split()
+            for pid in self._ask(f"get_client_list {server}").split() if pid.isdigit()}
+
+  def _ask(self, command: str) -> str:
+    try:
+      done = subprocess.run([CONTROL], input=command + "\n", text=True, env=self._env(), capture_output=True,
+                            timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+      return ""
+    return done.stdout if done.returncode == 0 else ""
+
   def log_tail(self, lines: int = 3) -> str:
     return " | ".join(line.strip() for line in self.log().splitlines()[-lines:])
 
@@ -91,8 +106,9 @@ def wanted(mode: str, slots_per_gpu: int, gpus: list[str]) -> bool:
   return mode == "on" or slots_per_gpu > 1
 
 
-# a CUDA context through the daemon, made by the driver API alone (no JAX); exit 0 where the driver
-# made it, else 1 with the failing call and CUDA's error code on its last line
+# a CUDA context through the daemon, made by the driver API alone (no JAX), held until a line comes on
+# stdin (so the daemon can be asked for its clients meanwhile); prints "ready" where the driver made it,
+# else exits 1 with the failing call and CUDA's error code on its last line
 _CLIENT_PROBE = """import ctypes, sys
 cuda = ctypes.CDLL(sys.argv[1])
 dev, ctx = ctypes.c_int(), ctypes.c_void_p()
@@ -101,26 +117,40 @@ for name, call in (("cuInit", lambda: cuda.cuInit(0)), ("cuDeviceGet", lambda: c
   code = call()
   if code:
     sys.exit(f"{name}: CUDA error {code}")
+print("ready", flush=True)
+sys.stdin.readline()
 cuda.cuDevicePrimaryCtxRelease(dev)
 """
+PROBE_TIMEOUT = 60  # s for the probe's CUDA context (~1 s on an H200 host)
 
 
 def client_error(mps: Mps, gpu: str) -> str | None:
   """Why a process on GPU `gpu` would not run through the daemon (some hosts' sandboxes have no MPS
   server; a CUDA process that cannot reach it runs without MPS), or None where a probe's context went
-  through it: the driver made the context and the daemon logged the probe as its client."""
+  through it: the driver made the context, and while the probe held it the daemon named it among its
+  servers' clients. (Not the daemon's log: it reaches its file late, e.g. still empty seconds after a
+  client on an H200 host, 2026-11-28.)"""
   env = {**mps._env(), "CUDA_VISIBLE_DEVICES": gpu}  # noqa: SLF001
+  probe = subprocess.Popen([sys.executable, "-c", _CLIENT_PROBE, CUDA_LIBRARY], env=env, stdin=subprocess.PIPE,
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+  late = f"a CUDA context through it took over {PROBE_TIMEOUT} s"
   try:
-    done = subprocess.Popen([sys.executable, "-c", _CLIENT_PROBE, CUDA_LIBRARY], env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)
-    _, err = done.communicate(timeout=60)
+    if not select.select([probe.stdout], [], [], PROBE_TIMEOUT)[0]:
+      return late
+    ready = probe.stdout.readline().strip() == "ready"
+    served = ready and probe.pid in mps.clients()
+    _, err = probe.communicate("\n", timeout=PROBE_TIMEOUT)
   except subprocess.TimeoutExpired:
-    done.kill()
-    return "a CUDA context through it took over 60 s"
-  if done.returncode != 0:
+    return late
+  finally:
+    if probe.poll() is None:
+      probe.kill()
+      probe.wait()
+  if not ready:
     return f"a CUDA context through it failed ({(err.strip().splitlines() or ['no message'])[-1][:200]})"
-  if f"NEW CLIENT {done.pid} " not in mps.log():
-    return f"the probe's CUDA context did not go through it (its log: {mps.log_tail() or 'empty'})"
+  if not served:
+    return ("the probe's CUDA context did not go through it (the daemon named no such client; its log: "
+            f"{mps.log_tail() or 'empty'})")
   return None
 
 
