@@ -438,3 +438,20 @@ def test_runs_a_study_stop_cut_off_before_a_checkpoint_are_packed_again(tmp_path
   failed = {"started": 1.0, "ended": 2.0, "rc": 1, "phase": "train", "pack": ["x"]}
   drained = {**failed, "rc": 143, "stopped": True}  # SIGTERM: its run saved and came back
   assert not starts_afresh(cell, [failed], str(folder)) and not starts_afresh(cell, [cut, drained], str(folder))
+
+
+def test_the_study_line_gives_an_eta_only_while_runs_wait_for_a_slot():
+  """Runs finished a second x runs left: where every run left is running (a pack's runs end
+  together), that rate says nothing, and the line gives no ETA."""
+  from train.study.executor import StudyState, _progress
+
+  def line(done: int, running: int, queued: int, busy: int) -> str:
+    status = ["done"] * done + ["running"] * running + ["queued"] * queued
+    state = StudyState("unused", {f"c{i}": {"status": s, "attempts": []} for i, s in enumerate(status)})
+    out = io.StringIO()
+    _progress("p", state, time.time() - 100, done, busy, out)
+    return out.getvalue()
+
+  assert line(20, 40, 0, 40).startswith("[study] p: 20 done, 40 running, 0 waiting, 0 to retry, 0 failed | 100 s\n")
+  assert line(20, 40, 0, 20).rstrip().endswith("| 100 s, eta 200 s")  # 20 waiting for a slot: 0.2 runs/s, 40 left
+  assert line(20, 20, 10, 20).rstrip().endswith("| 100 s, eta 150 s")  # 10 to retry

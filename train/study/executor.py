@@ -125,11 +125,15 @@ class StudyState:
 
 def _progress(name: str, state: StudyState, t0: float, finished_now: int, running: int | None, stream) -> None:
   """One line: runs done / running / waiting for a slot / to retry / failed, elapsed, ETA; running
-  None: not known (every submitted run counts as waiting)."""
+  None: not known (every submitted run counts as waiting). The ETA (runs finished so far a second x
+  runs left) only while some run waits for a slot: where every run left is running, e.g. a pack's
+  runs ending together, it would say nothing (the paper study on one GPU: "eta 2,026 s" 21 s before
+  its end); the runs' own logs have theirs."""
   n, elapsed = state.counts(), time.time() - t0
   left = n["running"] + n["queued"]
-  eta = f", eta {elapsed / finished_now * left:,.0f} s" if finished_now and left else ""
   busy = min(running or 0, n["running"])
+  waiting = left - busy
+  eta = f", eta {elapsed / finished_now * left:,.0f} s" if finished_now and waiting else ""
   print(f"[study] {name}: {n['done']} done, {busy} running, {n['running'] - busy} waiting, {n['queued']} to retry, "
         f"{n['failed']} failed | {elapsed:,.0f} s{eta}", file=stream, flush=True)
 
