@@ -114,8 +114,9 @@ def test_a_daemon_that_cannot_start_is_refused_under_on_and_noted_under_auto(con
 def test_the_daemon_is_used_only_where_a_probes_cuda_context_went_through_it(control, monkeypatch, capsys, probe,
                                                                             served, error):
   """A CUDA process that cannot reach the daemon runs without it: while the probe holds its context,
-  the daemon must name it among its clients. Where it is not, the daemon is stopped again and auto goes on without it (on refuses);
-  where it is, the workers get its environment, and at exit the cluster closes before it stops."""
+  the daemon must name it among its clients. Where it does not, or the probe fails or hangs, the
+  daemon is stopped again and auto goes on without it (on refuses); where it does, the workers get
+  its environment, and at exit the cluster closes before it stops."""
   monkeypatch.setattr(mps, "CUDA_LIBRARY", served or "no-such-libcuda.so")
   monkeypatch.setattr(mps, "PROBE_TIMEOUT", 1)
   if probe:

@@ -40,12 +40,14 @@ for v in variants:
     for m in map(line.search, open(os.path.join(work, v.replace(":", "-"), f"{prog}.log"), errors="replace")):
       if m:
         by_step.setdefault(int(m[1].replace(",", "")), []).append((int(m[2].replace(",", "")), int(m[3])))
-    found.setdefault(v, {})[prog] = [{"step": s, "clock_s": max(c for _, c in r), "steps_per_s": statistics.median(x for x, _ in r)}
-                                     for s, r in sorted(by_step.items())]
+    found.setdefault(v, {})[prog] = [
+        {"step": s, "clock_s": max(c for _, c in r), "steps_per_s": statistics.median(x for x, _ in r)}
+        for s, r in sorted(by_step.items())]
 out = os.path.join(os.environ.get("OUT", "."), "mps-pair.json")
 device = os.popen("nvidia-smi --query-gpu=name,driver_version --format=csv,noheader").read().strip()
-json.dump({"device": device, "date": os.popen("date -u +%FT%TZ").read().strip(), "each_s": int(os.environ.get("EACH", 270)),
-           "command": " ".join(["bash scripts/gpu/mps_pair.sh", *variants]), "variants": found}, open(out, "w"), indent=1)
+json.dump({"device": device, "date": os.popen("date -u +%FT%TZ").read().strip(),
+           "each_s": int(os.environ.get("EACH", 270)), "command": " ".join(["bash scripts/gpu/mps_pair.sh", *variants]),
+           "variants": found}, open(out, "w"), indent=1)
 for v, progs in found.items():
   print(v, {p: [r["steps_per_s"] for r in rows] for p, rows in progs.items()})
 PY

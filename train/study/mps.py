@@ -10,9 +10,10 @@ The control daemon started here is this study's own: its pipe directory is a fre
 /tmp (a Unix socket's path has at most 108 bytes), and only the processes given `client_env()`
 connect to it. It changes no setting of the GPU. A CUDA process that cannot reach the daemon runs
 without MPS, silently (NVIDIA's manual), so `client_error` checks that the daemon names a probe's
-context among its clients. The cost (NVIDIA's MPS documentation, "Error Containment"): a fatal GPU fault of one run (an
-illegal memory access, not an out-of-memory error) reaches every run on that GPU, and the daemon
-takes no new run until they have all exited; the study records them failed and retries them.
+context among its clients. The cost (NVIDIA's MPS documentation, "Error Containment"): a fatal GPU
+fault of one run (an illegal memory access, not an out-of-memory error) reaches every run on that
+GPU, and the daemon takes no new run until they have all exited; the study records them failed and
+retries them.
 """
 
 from __future__ import annotations
