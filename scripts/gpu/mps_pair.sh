@@ -18,6 +18,10 @@ ppo=(python3 -m train.run --tasks $tasks --seeds 0,1,2,3,4 --algo ppo --preset g
      --early-stop none --compile-ahead on)
 work=/tmp/mps-pair
 for variant in "$@"; do
+  [[ $variant =~ ^[0-9]+:[01]$ ]] || { echo "error: a variant is SHARE:PRIORITY (e.g. 85:1), got '$variant'" >&2; exit 2; }
+done
+[ $# -gt 0 ] || { echo "usage: EACH=270 bash scripts/gpu/mps_pair.sh SHARE:PRIORITY ..." >&2; exit 2; }
+for variant in "$@"; do
   share=${variant%%:*} priority=${variant#*:}
   dir=$work/$share-$priority && rm -rf "$dir" && mkdir -p "$dir/pipe" "$dir/log"
   export CUDA_MPS_PIPE_DIRECTORY=$dir/pipe CUDA_MPS_LOG_DIRECTORY=$dir/log
