@@ -1,49 +1,60 @@
 #!/usr/bin/env bash
-# On a GPU host: the paper study's two programs (configs/studies/paper-packed.yaml: the SAC program of
-# 40 one-robot runs, the PPO program of 20 runs x 4,096 robots) side by side on one GPU under a CUDA
-# MPS daemon of this script's own, once per VARIANT, each for EACH seconds (default 270, compilation
-# included: ~90 s from an empty cache, less from the shared one in /tmp/mps-pair-cache). A VARIANT is
-# SHARE:PRIORITY for the PPO program: its CUDA_MPS_ACTIVE_THREAD_PERCENTAGE (85: train.study's) and its
-# CUDA_MPS_CLIENT_PRIORITY (0 normal, 1 below normal: NVIDIA's MPS manual); the SAC program runs at
-# 85 % and priority 0, as train.study starts it. Writes $OUT/mps-pair.json: each variant's training
-# steps/s per run at each report of each program (the median over its runs' [train] lines), and
-# prints it. Figures are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
+# On a GPU host: the paper study's two programs (the packs `python -m train.study paper-packed --plan`
+# prints: the SAC program of 40 one-robot runs, the PPO program of 20 runs x 4,096 robots; their
+# commands come from configs/studies/paper-packed.yaml through train.study.spec.pack_train_args) side
+# by side on one GPU under a CUDA MPS daemon of this script's own, once per VARIANT, each for EACH
+# seconds (default 270, compilation included: ~90 s from an empty cache, less from the shared one in
+# /tmp/mps-pair-cache). A VARIANT is SHARE:PRIORITY for the PPO program: its
+# CUDA_MPS_ACTIVE_THREAD_PERCENTAGE (85: train.study's) and its CUDA_MPS_CLIENT_PRIORITY (0 normal, 1
+# below normal: NVIDIA's MPS manual); the SAC program runs at 85 % and priority 0, as train.study
+# starts it. Writes $OUT/mps-pair.json: each variant's training steps/s per run at each report of each
+# program (the median over its runs' training rows in the program's database), and prints it. Figures
+# are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
 # Usage: EACH=270 bash scripts/gpu/mps_pair.sh 85:0 85:1
 set -uo pipefail
 export PYTHONUNBUFFERED=1 MJX_TRACKS_CACHE=/tmp/mps-pair-cache XLA_PYTHON_CLIENT_MEM_FRACTION=0.45
-tasks=asc-inc-cog,asc-uni-cog,des-inc-ang,des-uni-ang
-sac=(python3 -m train.run --tasks $tasks --seeds 0,1,2,3,4 --early-stops return,none --algo sac --preset paper
-     --hp max_replay_size=20000 --steps 20000 --compile-ahead on)
-ppo=(python3 -m train.run --tasks $tasks --seeds 0,1,2,3,4 --algo ppo --preset gpu --steps 2000000
-     --early-stop none --compile-ahead on)
 work=/tmp/mps-pair
 for variant in "$@"; do
-  [[ $variant =~ ^[0-9]+:[01]$ ]] || { echo "error: a variant is SHARE:PRIORITY (e.g. 85:1), got '$variant'" >&2; exit 2; }
+  [[ $variant =~ ^[0-9]+:[01]$ ]] \
+    || { echo "error: a variant is SHARE:PRIORITY (e.g. 85:1), got '$variant'" >&2; exit 2; }
 done
 [ $# -gt 0 ] || { echo "usage: EACH=270 bash scripts/gpu/mps_pair.sh SHARE:PRIORITY ..." >&2; exit 2; }
+# the study's two packs' train.run arguments, one line each: "sac ARGS" and "ppo ARGS"
+packs=$(python3 -c '
+import shlex
+from train.study.spec import cells, load_study, pack_train_args, packs_of
+runs = [c for c in cells(load_study("paper-packed", ("baselines=[]",))) if not c.is_baseline]
+for pack in packs_of(runs):
+  print(pack[0].algo, shlex.join(pack_train_args(pack)))') || exit 1
+read -ra sac <<< "$(grep '^sac ' <<< "$packs" | cut -d' ' -f2-)"
+read -ra ppo <<< "$(grep '^ppo ' <<< "$packs" | cut -d' ' -f2-)"
+[ ${#sac[@]} -gt 0 ] && [ ${#ppo[@]} -gt 0 ] \
+  || { echo "error: the study has no SAC and PPO packs: $packs" >&2; exit 1; }
 for variant in "$@"; do
   share=${variant%%:*} priority=${variant#*:}
   dir=$work/$share-$priority && rm -rf "$dir" && mkdir -p "$dir/pipe" "$dir/log"
   export CUDA_MPS_PIPE_DIRECTORY=$dir/pipe CUDA_MPS_LOG_DIRECTORY=$dir/log
   nvidia-cuda-mps-control -d || { echo "error: no MPS daemon for $variant" >&2; exit 1; }
-  CUDA_MPS_ACTIVE_THREAD_PERCENTAGE=85 CUDA_MPS_CLIENT_PRIORITY=0 timeout "${EACH:-270}" \
-    "${sac[@]}" --out "$dir/sac" > "$dir/sac.log" 2>&1 &
-  CUDA_MPS_ACTIVE_THREAD_PERCENTAGE=$share CUDA_MPS_CLIENT_PRIORITY=$priority timeout "${EACH:-270}" \
-    "${ppo[@]}" --out "$dir/ppo" > "$dir/ppo.log" 2>&1 &
+  for prog in sac ppo; do
+    if [ $prog = sac ]; then args=("${sac[@]}") sm=85 prio=0; else args=("${ppo[@]}") sm=$share prio=$priority; fi
+    CUDA_MPS_ACTIVE_THREAD_PERCENTAGE=$sm CUDA_MPS_CLIENT_PRIORITY=$prio timeout "${EACH:-270}" \
+      python3 -m train.run "${args[@]}" --out "$dir/$prog" --db "$dir/$prog.sqlite" > "$dir/$prog.log" 2>&1 &
+  done
   wait
   echo quit | nvidia-cuda-mps-control
   echo "$variant: $(grep -h "compiled in" "$dir"/*.log | tr '\n' ' ')"
 done
 python3 - "$work" "$@" <<'PY'
-import json, os, re, statistics, sys
+import json, os, statistics, sys
+from train.db import ExperimentDB
 work, variants, found = sys.argv[1], sys.argv[2:], {}
-line = re.compile(r"\[train\]\s+([\d,]+)/[\d,]+ .*?\)\s+([\d,]+) steps/s.*\| (\d+) s, eta")
 for v in variants:
   for prog in ("sac", "ppo"):
-    by_step = {}
-    for m in map(line.search, open(os.path.join(work, v.replace(":", "-"), f"{prog}.log"), errors="replace")):
-      if m:
-        by_step.setdefault(int(m[1].replace(",", "")), []).append((int(m[2].replace(",", "")), int(m[3])))
+    db, by_step = ExperimentDB(os.path.join(work, v.replace(":", "-"), f"{prog}.sqlite")), {}
+    for run in db.runs():
+      for row in db.stats(run["run_id"]):
+        if row["source"] == "train" and row["steps_per_s"] is not None:
+          by_step.setdefault(row["step"], []).append((row["steps_per_s"], row["wall_s"]))
     found.setdefault(v, {})[prog] = [
         {"step": s, "clock_s": max(c for _, c in r), "steps_per_s": statistics.median(x for x, _ in r)}
         for s, r in sorted(by_step.items())]
