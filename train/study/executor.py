@@ -132,8 +132,8 @@ def _progress(name: str, state: StudyState, t0: float, finished_now: int, runnin
   n, elapsed = state.counts(), time.time() - t0
   left = n["running"] + n["queued"]
   busy = min(running or 0, n["running"])
-  waiting = left - busy
-  eta = f", eta {elapsed / finished_now * left:,.0f} s" if finished_now and waiting else ""
+  not_running = left - busy  # waiting for a slot or to retry
+  eta = f", eta {elapsed / finished_now * left:,.0f} s" if finished_now and not_running else ""
   print(f"[study] {name}: {n['done']} done, {busy} running, {n['running'] - busy} waiting, {n['queued']} to retry, "
         f"{n['failed']} failed | {elapsed:,.0f} s{eta}", file=stream, flush=True)
 

@@ -61,16 +61,18 @@ class Mps:
   def clients(self) -> set[int]:
     """The pids of the processes whose CUDA contexts go through the daemon now (its answer to
     get_server_list, then get_client_list for each server), or an empty set where it did not answer."""
-    return {int(pid) for server in self._ask("get_server_list").split()
-            for pid in self._ask(f"get_client_list {server}").split() if pid.isdigit()}
+    return {int(pid) for server in (self._ask("get_server_list") or "").split()
+            for pid in (self._ask(f"get_client_list {server}") or "").split() if pid.isdigit()}
 
-  def _ask(self, command: str) -> str:
+  def _ask(self, command: str) -> str | None:
+    """The daemon's answer to one command of its control program, or None where the program failed
+    or took over 30 s."""
     try:
       done = subprocess.run([CONTROL], input=command + "\n", text=True, env=self._env(), capture_output=True,
                             timeout=30)
     except (OSError, subprocess.TimeoutExpired):
-      return ""
-    return done.stdout if done.returncode == 0 else ""
+      return None
+    return done.stdout if done.returncode == 0 else None
 
   def log_tail(self, lines: int = 3) -> str:
     return " | ".join(line.strip() for line in self.log().splitlines()[-lines:])
@@ -78,12 +80,7 @@ class Mps:
   def stop(self) -> None:
     """Asks the daemon to quit, and ends it (SIGTERM to its pid file's process) where that failed or
     took over 30 s (a client still connected); then removes its folder. Never raises."""
-    try:
-      quit_ok = subprocess.run([CONTROL], input="quit\n", text=True, env=self._env(), capture_output=True,
-                               timeout=30).returncode == 0
-    except (OSError, subprocess.TimeoutExpired):
-      quit_ok = False
-    if not quit_ok:
+    if self._ask("quit") is None:
       try:
         with open(os.path.join(self.pipe_dir, "nvidia-cuda-mps-control.pid")) as f:
           os.kill(int(f.read().strip()), signal.SIGTERM)
