@@ -5,9 +5,9 @@
 # by side on one GPU under a CUDA MPS daemon of this script's own, once per VARIANT, each for EACH
 # seconds (default 270, compilation included: ~90 s from an empty cache, less from the shared one in
 # /tmp/mps-pair-cache). A VARIANT is SHARE:PRIORITY for the PPO program: its
-# CUDA_MPS_ACTIVE_THREAD_PERCENTAGE (85: train.study's) and its CUDA_MPS_CLIENT_PRIORITY (0 normal, 1
-# below normal: NVIDIA's MPS manual); the SAC program runs at 85 % and priority 0, as train.study
-# starts it. Writes $OUT/mps-pair.json: each variant's training steps/s per run at each report of each
+# CUDA_MPS_ACTIVE_THREAD_PERCENTAGE (train.study's: train.study.mps.SM_SHARE, 85) and its
+# CUDA_MPS_CLIENT_PRIORITY (0 normal, 1 below normal: NVIDIA's MPS manual); the SAC program runs at
+# SM_SHARE and priority 0, as train.study starts it. Writes $OUT/mps-pair.json: each variant's training steps/s per run at each report of each
 # program (the median over its runs' training rows in the program's database), and prints it. Figures
 # are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
 # Usage: EACH=270 bash scripts/gpu/mps_pair.sh 85:0 85:1
@@ -19,13 +19,17 @@ for variant in "$@"; do
     || { echo "error: a variant is SHARE:PRIORITY (e.g. 85:1), got '$variant'" >&2; exit 2; }
 done
 [ $# -gt 0 ] || { echo "usage: EACH=270 bash scripts/gpu/mps_pair.sh SHARE:PRIORITY ..." >&2; exit 2; }
-# the study's two packs' train.run arguments, one line each: "sac ARGS" and "ppo ARGS"
+# train.study's share of the SMs, then the study's two packs' train.run arguments, one line each: "sac ARGS"
+# and "ppo ARGS"
 packs=$(python3 -c '
 import shlex
+from train.study.mps import SM_SHARE
+print("share", SM_SHARE)
 from train.study.spec import cells, load_study, pack_train_args, packs_of
 runs = [c for c in cells(load_study("paper-packed", ("baselines=[]",))) if not c.is_baseline]
 for pack in packs_of(runs):
   print(pack[0].algo, shlex.join(pack_train_args(pack)))') || exit 1
+study_share=$(grep '^share ' <<< "$packs" | cut -d' ' -f2)
 read -ra sac <<< "$(grep '^sac ' <<< "$packs" | cut -d' ' -f2-)"
 read -ra ppo <<< "$(grep '^ppo ' <<< "$packs" | cut -d' ' -f2-)"
 [ ${#sac[@]} -gt 0 ] && [ ${#ppo[@]} -gt 0 ] \
@@ -36,7 +40,8 @@ for variant in "$@"; do
   export CUDA_MPS_PIPE_DIRECTORY=$dir/pipe CUDA_MPS_LOG_DIRECTORY=$dir/log
   nvidia-cuda-mps-control -d || { echo "error: no MPS daemon for $variant" >&2; exit 1; }
   for prog in sac ppo; do
-    if [ $prog = sac ]; then args=("${sac[@]}") sm=85 prio=0; else args=("${ppo[@]}") sm=$share prio=$priority; fi
+    if [ $prog = sac ]; then args=("${sac[@]}") sm=$study_share prio=0
+    else args=("${ppo[@]}") sm=$share prio=$priority; fi
     CUDA_MPS_ACTIVE_THREAD_PERCENTAGE=$sm CUDA_MPS_CLIENT_PRIORITY=$prio timeout "${EACH:-270}" \
       python3 -m train.run "${args[@]}" --out "$dir/$prog" --db "$dir/$prog.sqlite" > "$dir/$prog.log" 2>&1 &
   done
