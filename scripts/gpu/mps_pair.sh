@@ -7,8 +7,9 @@
 # /tmp/mps-pair-cache). A VARIANT is SHARE:PRIORITY for the PPO program: its
 # CUDA_MPS_ACTIVE_THREAD_PERCENTAGE (train.study's: train.study.mps.SM_SHARE, 85) and its
 # CUDA_MPS_CLIENT_PRIORITY (0 normal, 1 below normal: NVIDIA's MPS manual); the SAC program runs at
-# SM_SHARE and priority 0, as train.study starts it. Writes $OUT/mps-pair.json: each variant's training steps/s per run at each report of each
-# program (the median over its runs' training rows in the program's database), and prints it. Figures
+# SM_SHARE and priority 0, as train.study starts it. Writes $OUT/mps-pair.json: each variant's
+# training steps/s per run at each report of each program (the median over its runs' training rows in
+# the program's database), and prints it. Figures
 # are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
 # Usage: EACH=270 bash scripts/gpu/mps_pair.sh 85:0 85:1
 set -uo pipefail
