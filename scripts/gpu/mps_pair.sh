@@ -11,6 +11,7 @@
 # training steps/s per run at each report of each program (the median over its runs' training rows in
 # the program's database), and prints it. Figures
 # are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
+# Measured: results/speed/group/mps-pair-priority-H200-2026-11-28.json (docs/benchmarks.md).
 # Usage: EACH=270 bash scripts/gpu/mps_pair.sh 85:0 85:1
 set -uo pipefail
 export PYTHONUNBUFFERED=1 MJX_TRACKS_CACHE=/tmp/mps-pair-cache XLA_PYTHON_CLIENT_MEM_FRACTION=0.45
