@@ -8,7 +8,7 @@ program's compilation and 100 trials). Writes OUT/compile-flags.json: per varian
 "compiled in N s", its steady training steps/s (median of its [train] lines after the first), the
 ten longest XLA compilations, the evaluation's wall s; with the device, command and date.
 Usage (GPU host): python scripts/gpu/compile_flags.py OUT [--task asc-inc-cog] [--steps 600000]
-    [--algo ppo] [--preset P] [--hp KEY=VALUE ...] [--variants NAME,...] [--skip-eval]
+    [--algo ppo] [--preset P] [--hp KEY=VALUE ...] [--variants NAME,...] [--skip-eval] [--train-args '...']
 E.g. the paper's one-robot SAC, launch-bound (~16 ms a training step): --algo sac --preset paper --steps 5000
 --hp num_evals=1 --hp max_replay_size=20000 --hp training_metrics_steps=500 --skip-eval."""
 
@@ -19,6 +19,7 @@ import datetime
 import json
 import os
 import re
+import shlex
 import statistics
 import subprocess
 import sys
@@ -66,7 +67,8 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
   run = f"{work}/{name}-run"
   cmd = [sys.executable, "-m", "train.run", "--task", args.task, "--algo", args.algo, "--steps", str(args.steps),
          "--early-stop", "none", "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite",
-         *(["--preset", args.preset] if args.preset else []), *(x for h in args.hp for x in ("--hp", h))]
+         *(["--preset", args.preset] if args.preset else []), *(x for h in args.hp for x in ("--hp", h)),
+         *shlex.split(args.train_args)]
   t0 = time.time()
   proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
   out = proc.stdout + (f"\n[stderr] {proc.stderr[-400:]}" if proc.returncode else "")  # why a variant failed
@@ -103,6 +105,8 @@ def main() -> None:
   p.add_argument("--hp", action="append", default=None,
                  help="train.run's --hp KEY=VALUE, repeatable (default: training_metrics_steps=81920)")
   p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of " + ", ".join(VARIANTS))
+  p.add_argument("--train-args", default="", help="more train.run arguments for every variant, one string "
+                 "(e.g. '--compile-ahead off')")
   p.add_argument("--skip-eval", action="store_true", help="no evaluation after each run (compile and training only)")
   args = p.parse_args()
   args.hp = args.hp or ["training_metrics_steps=81920"]  # a [train] line (steps/s) every PPO update
@@ -114,7 +118,7 @@ def main() -> None:
       results[name] = _variant(name, VARIANTS[name], args, work)
       print(name, {k: v for k, v in results[name].items() if k not in ("log_tail", "longest_compilations")}, flush=True)
       os.makedirs(args.out, exist_ok=True)
-      json.dump({"device": device, "command": "python scripts/gpu/compile_flags.py " + " ".join(sys.argv[1:]),
+      json.dump({"device": device, "command": "python scripts/gpu/compile_flags.py " + shlex.join(sys.argv[1:]),
                  "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                  "variants": results}, open(f"{args.out}/compile-flags.json", "w"), indent=1)
 
