@@ -34,7 +34,7 @@ CUDA_LIBRARY = "libcuda.so.1"  # the CUDA driver the probe loads
 # (6,230 / ~37): time-sliced 0.77x / 0.19x; MPS with no share 0.92x / 0.22x; PPO at 85 % 0.87-0.89x /
 # 0.54-0.62x; PPO at 60 % 0.70-0.71x / 0.59-0.76x (SAC uncapped; results/speed/group/
 # paper-packed-mps-1-H200-2026-11-28.md). The larger program at MPS client priority "below normal"
-# (CUDA_MPS_CLIENT_PRIORITY=1) gave SAC 3-6 % (mps-pair-priority-H200-2026-11-28.json): every run at 0
+# (CUDA_MPS_CLIENT_PRIORITY=1) gave SAC 3-6 % (mps-pair-priority-H200-2026-11-28.json): runs keep the default
 SM_SHARE = 85
 MODES = ("auto", "on", "off")  # --mps: auto tries it where runs share a GPU (a note where it cannot be had)
 
