@@ -51,6 +51,18 @@ def log_compilations(path: str) -> None:
       logger.addHandler(_Events(logging.DEBUG))
 
 
+def longest_compilations(path: str, n: int = 10) -> list[list]:
+  """The n longest XLA compilations [seconds, what] logged in `path` by log_compilations ([] where
+  there is no such file)."""
+  import re  # noqa: PLC0415
+  rows = []
+  for line in open(path, errors="replace") if os.path.exists(path) else ():
+    m = re.search(r"Finished XLA compilation of (\S+) in ([0-9.e-]+) sec", line)
+    if m:
+      rows.append([round(float(m.group(2)), 2), m.group(1)])
+  return sorted(rows, reverse=True)[:n]
+
+
 def _times_path() -> pathlib.Path:
   return cache_dir() / "compile_seconds.json"
 

@@ -105,6 +105,21 @@ def test_the_compile_estimate_is_the_longest_compilation_seen(tmp_path, monkeypa
   assert compile_cache.last_compile_seconds("ppo/cpu") == 42.0
 
 
+def test_the_compilation_log_names_the_longest_compilations(tmp_path):
+  """MJX_TRACKS_COMPILE_LOG's lines (a process's own JAX log records), read back by
+  compile_cache.longest_compilations: the jitted function's compilation among them, longest first."""
+  from mjx_tracks import compile_cache
+  log = str(tmp_path / "compile.log")
+  code = ("from mjx_tracks import compile_cache; compile_cache.log_compilations({!r}); import jax, jax.numpy as jnp;"
+          "jax.jit(lambda x: jnp.sin(x) * 2).lower(jnp.ones(3)).compile(); jax.jit(jnp.cos)(jnp.ones(2))").format(log)
+  subprocess.run([sys.executable, "-c", code], check=True, env={**os.environ, "JAX_PLATFORMS": "cpu"}, timeout=120)
+  longest = compile_cache.longest_compilations(log, n=50)
+  assert {"jit(<lambda>)", "jit(cos)"} <= {what for _, what in longest}
+  assert [s for s, _ in longest] == sorted((s for s, _ in longest), reverse=True) and all(s >= 0 for s, _ in longest)
+  assert len(compile_cache.longest_compilations(log, n=1)) == 1
+  assert compile_cache.longest_compilations(str(tmp_path / "none.log")) == []
+
+
 def test_train_evaluate_takes_several_scenes_each_once_and_refuses_them_beside_the_suite():
   cfg = load_config("nav")
   args = evaluate.parser().parse_args(["r", "--scene", "nav/hallway", "--scene", "nav/zigzag", "--scene", "nav/hallway"])

@@ -117,6 +117,8 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
   d = dbmod.ExperimentDB(database)
   runs = {r["seed"]: r for r in d.runs()}
   assert set(runs) == {0, 1} and all(r["status"] == "done" for r in runs.values())
+  compiled = [[e["detail"] for e in d.events(r["run_id"]) if e["event"] == "compiled"] for r in runs.values()]
+  assert compiled[0] == compiled[1] and len(compiled[0]) == 1  # one program: one compilation, each run's record
   params, probes = [], []
   for seed in (0, 1):
     folder = os.path.join(out, f"s{seed}")
@@ -215,7 +217,7 @@ def test_the_runs_of_one_program_do_not_see_each_other(tmp_path):
   from train.core.group import build_group, compile_group
   from train.core.plan import plan_run
   t = build_group([plan_run(run.parser().parse_args([*TRAIN_TINY, "--seed", "0", "--out", str(tmp_path / "r")]))])
-  update = compile_group(t, 2)
+  update, _ = compile_group(t, 2)
   init = jax.jit(jax.vmap(t.learner.init))
   alone = jax.jit(t.learner.init)(jax.random.PRNGKey(2))  # each run starts from its separate run's state
   together = init(jnp.stack([jax.random.PRNGKey(0), jax.random.PRNGKey(2)]))

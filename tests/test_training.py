@@ -42,6 +42,26 @@ def test_ppo_run_writes_checkpoint_database_rows_and_events(ppo_run):
   assert any(s["eps"] is not None for s in train_rows)
 
 
+def test_the_database_holds_the_compile_time_and_training_rates_the_command_printed(ppo_run):
+  """What benchmarks read of a run (train.bench.runs), from its database: the training step's
+  compile seconds and each training report's steps/s, as the run printed them (rounded as printed)."""
+  import re
+  from train.bench import runs
+  out, database = ppo_run
+  said = open(os.path.join(os.path.dirname(out), "ppo.stdout")).read()
+  (printed_compile,) = re.findall(r"compiled in ([0-9,]+) s", said)
+  printed_rates = [float(x.replace(",", "")) for x in re.findall(r"^\[train\].*?([0-9,]+) steps/s", said, re.M)]
+  compiled = runs.compile_seconds(database)
+  assert compiled is not None and abs(compiled - float(printed_compile.replace(",", ""))) <= 0.501
+  rates = runs.training_rates(database)
+  assert len(rates) == len(printed_rates) >= 2 and [r["step"] for r in rates] == sorted(r["step"] for r in rates)
+  assert [round(r["steps_per_s"]) for r in rates] == printed_rates
+  assert runs.steady_rate(rates) == np.median([r["steps_per_s"] for r in rates[1:]])
+  assert runs.steady_rate(rates[:1]) is None
+  with pytest.raises(FileNotFoundError, match="no run database"):
+    runs.training_rates(database + ".missing")
+
+
 def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
   from flax import serialization
   from train.core.networks import NetworkSpec

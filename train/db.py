@@ -66,7 +66,8 @@ SCHEMA = SCHEMA.format(  # the metric columns: mjx_tracks.metrics
 STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", *REPORT_COLUMN.values(), "source")
 STAT_SOURCES = ("train", "eval", "probe")  # training episodes, Brax's evaluator (uniform scenes), train.core.probe
 OLD_SOURCES = {"hardest": "probe"}  # a source's name in databases written before it was renamed
-EVENTS = ("started", "resumed", "checkpoint", "finished", "interrupted", "failed", "crashed")
+# "compiled": the training step compiled (its detail: the seconds it took, e.g. "34.215"; train.bench.runs reads it)
+EVENTS = ("started", "resumed", "compiled", "checkpoint", "finished", "interrupted", "failed", "crashed")
 # a run's final status -> the event that records it
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",
                 "failed": "failed", "crashed": "crashed"}
@@ -193,6 +194,11 @@ class ExperimentDB:
       c.execute(f"INSERT INTO stats (run_id, {', '.join(STAT_COLUMNS)}, metrics_json) "
                 f"VALUES (?, {', '.join('?' * len(STAT_COLUMNS))}, ?)",
                 [run_id, *vals, json.dumps(metrics)])
+
+  def compiled(self, run_id: str, step: int, seconds: float) -> None:
+    """Records that the run's training step compiled (at `step`: 0, or the step resumed from) in `seconds`."""
+    with self._conn() as c:
+      self._event(c, run_id, "compiled", step, f"{seconds:.3f}")
 
   def set_checkpoint(self, run_id: str, checkpoint_dir: str, step: int) -> None:
     with self._conn() as c:
@@ -333,6 +339,7 @@ class NullDB:
   def start(self, *args, **kwargs) -> None: ...
   def finish(self, *args, **kwargs) -> None: ...
   def set_checkpoint(self, *args, **kwargs) -> None: ...
+  def compiled(self, *args, **kwargs) -> None: ...
   def log_stats(self, *args, **kwargs) -> None: ...
 
   def wall_offset(self, run_id: str, step: int) -> float:

@@ -52,7 +52,7 @@ def main() -> int:
   plans = group_plans(parser().parse_args(train_argv))
   t = build_group(plans)
   tasks = group_tasks(t, plans)
-  update = compile_group(t, len(plans), tasks=tasks)
+  update, _ = compile_group(t, len(plans), tasks=tasks)
   states = jax.block_until_ready(update(init_group(t, plans, tasks))[0])
   round_seconds(t, states, out / "ckpt" / "warm-up", 0, "new")  # orbax's first save sets itself up
   result = {"device": str(jax.devices()[0].device_kind), "jax": jax.__version__, "runs": len(plans),

@@ -4,9 +4,10 @@ an empty cache under XLA flag variants, and how fast each trains. Each variant r
 (H: --hp, default training_metrics_steps=81920, a PPO [train] line every update) in its own process with
 its own empty compilation cache (MJX_TRACKS_CACHE) and MJX_TRACKS_COMPILE_LOG, then
 `python -m train.evaluate RUN --scene hardest --trials 100` (its wall time: the evaluation
-program's compilation and 100 trials). Writes OUT/compile-flags.json: per variant the run's
-"compiled in N s", its steady training steps/s (median of its [train] lines after the first), the
-ten longest XLA compilations, the evaluation's wall s; with the device, command and date.
+program's compilation and 100 trials). Writes OUT/compile-flags.json: per variant the seconds its
+training step took to compile and its steady training steps/s (the median of its training reports
+after the first), both read from the run's database (train.bench.runs), the ten longest XLA
+compilations of its compilation log, the evaluation's wall s; with the device, command and date.
 Usage (GPU host): python scripts/gpu/compile_flags.py OUT [--task asc-inc-cog] [--steps 600000]
     [--algo ppo] [--preset P] [--hp KEY=VALUE ...] [--variants NAME,...] [--skip-eval] [--train-args '...']
 E.g. the paper's one-robot SAC, launch-bound (~16 ms a training step): --algo sac --preset paper --steps 5000
@@ -18,13 +19,14 @@ import argparse
 import datetime
 import json
 import os
-import re
 import shlex
-import statistics
 import subprocess
 import sys
 import tempfile
 import time
+
+from mjx_tracks.compile_cache import longest_compilations
+from train.bench import runs
 
 VARIANTS = {  # name -> XLA_FLAGS added to the environment's
     "default": "",
@@ -50,39 +52,29 @@ VARIANTS = {  # name -> XLA_FLAGS added to the environment's
 }
 
 
-def _longest(log: str, n: int = 10) -> list[list]:
-  """The n longest XLA compilations (seconds, what) in a MJX_TRACKS_COMPILE_LOG file."""
-  rows = []
-  for line in open(log, errors="replace") if os.path.exists(log) else ():
-    m = re.search(r"Finished XLA compilation of (\S+) in ([0-9.]+) sec", line)
-    if m:
-      rows.append([round(float(m.group(2)), 2), m.group(1)])
-  return sorted(rows, reverse=True)[:n]
-
-
 def _variant(name: str, flags: str, args, work: str) -> dict:
   flags = flags.format(work=work)
   env = {**os.environ, "MJX_TRACKS_CACHE": f"{work}/{name}-cache", "MJX_TRACKS_COMPILE_LOG": f"{work}/{name}.compile.log",
          "XLA_FLAGS": " ".join(x for x in (os.environ.get("XLA_FLAGS", ""), flags) if x)}
-  run = f"{work}/{name}-run"
+  run, database = f"{work}/{name}-run", f"{work}/{name}.sqlite"
   cmd = [sys.executable, "-m", "train.run", "--task", args.task, "--algo", args.algo, "--steps", str(args.steps),
-         "--early-stop", "none", "--seed", "0", "--out", run, "--db", f"{work}/{name}.sqlite",
+         "--early-stop", "none", "--seed", "0", "--out", run, "--db", database,
          *(["--preset", args.preset] if args.preset else []), *(x for h in args.hp for x in ("--hp", h)),
          *shlex.split(args.train_args)]
   t0 = time.time()
   proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
   out = proc.stdout + (f"\n[stderr] {proc.stderr[-400:]}" if proc.returncode else "")  # why a variant failed
   wall = time.time() - t0
-  compiled = re.search(r"compiled in ([0-9,]+) s", out)
-  rates = [float(x.replace(",", "")) for x in re.findall(r"^\[train\].*?([0-9,]+) steps/s", out, re.M)]
+  made = os.path.isfile(database)  # not where the run failed before it started its records
   if args.skip_eval:
     ev, eval_wall, success = None, None, None
   else:
     ev, eval_wall, success = _evaluate(run, env, work, name)
-  return {"xla_flags": flags, "compile_s": float(compiled.group(1).replace(",", "")) if compiled else None,
-          "train_steps_per_s": statistics.median(rates[1:]) if len(rates) > 1 else None, "run_wall_s": round(wall, 1),
+  return {"xla_flags": flags, "compile_s": runs.compile_seconds(database) if made else None,
+          "train_steps_per_s": runs.steady_rate(runs.training_rates(database)) if made else None,
+          "run_wall_s": round(wall, 1),
           "eval_wall_s": eval_wall, "eval_rc": None if ev is None else ev.returncode, "hardest_success": success,
-          "longest_compilations": _longest(env["MJX_TRACKS_COMPILE_LOG"]), "log_tail": out[-600:]}
+          "longest_compilations": longest_compilations(env["MJX_TRACKS_COMPILE_LOG"]), "log_tail": out[-600:]}
 
 
 def _evaluate(run: str, env: dict, work: str, name: str):

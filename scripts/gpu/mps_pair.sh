@@ -8,8 +8,8 @@
 # CUDA_MPS_ACTIVE_THREAD_PERCENTAGE (train.study's: train.study.mps.SM_SHARE, 85) and its
 # CUDA_MPS_CLIENT_PRIORITY (0 normal, 1 below normal: NVIDIA's MPS manual); the SAC program runs at
 # SM_SHARE and priority 0, as train.study starts it. Writes $OUT/mps-pair.json: each variant's
-# training steps/s per run at each report of each program (the median over its runs' training rows in
-# the program's database), and prints it. Figures
+# programs' training-step compile seconds and training steps/s per run at each report (the median over
+# its runs' training rows), read from each program's database by train.bench.runs, and prints them. Figures
 # are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
 # Measured: results/speed/group/mps-pair-priority-H200-2026-11-28.json (docs/benchmarks.md).
 # Usage: EACH=270 bash scripts/gpu/mps_pair.sh 85:0 85:1
@@ -49,27 +49,20 @@ for variant in "$@"; do
   done
   wait
   echo quit | nvidia-cuda-mps-control
-  echo "$variant: $(grep -h "compiled in" "$dir"/*.log | tr '\n' ' ')"
 done
 python3 - "$work" "$@" <<'PY'
-import json, os, statistics, sys
-from train.db import ExperimentDB
+import json, os, sys
+from train.bench.runs import compile_seconds, training_rates
 work, variants, found = sys.argv[1], sys.argv[2:], {}
 for v in variants:
   for prog in ("sac", "ppo"):
-    db, by_step = ExperimentDB(os.path.join(work, v.replace(":", "-"), f"{prog}.sqlite")), {}
-    for run in db.runs():
-      for row in db.stats(run["run_id"]):
-        if row["source"] == "train" and row["steps_per_s"] is not None:
-          by_step.setdefault(row["step"], []).append((row["steps_per_s"], row["wall_s"]))
-    found.setdefault(v, {})[prog] = [
-        {"step": s, "clock_s": max(c for _, c in r), "steps_per_s": statistics.median(x for x, _ in r)}
-        for s, r in sorted(by_step.items())]
+    path = os.path.join(work, v.replace(":", "-"), f"{prog}.sqlite")
+    found.setdefault(v, {})[prog] = {"compile_s": compile_seconds(path), "reports": training_rates(path)}
 out = os.path.join(os.environ.get("OUT", "."), "mps-pair.json")
 device = os.popen("nvidia-smi --query-gpu=name,driver_version --format=csv,noheader").read().strip()
 json.dump({"device": device, "date": os.popen("date -u +%FT%TZ").read().strip(),
            "each_s": int(os.environ.get("EACH", 270)), "command": " ".join(["bash scripts/gpu/mps_pair.sh", *variants]),
            "variants": found}, open(out, "w"), indent=1)
 for v, progs in found.items():
-  print(v, {p: [r["steps_per_s"] for r in rows] for p, rows in progs.items()})
+  print(v, {p: (r["compile_s"], [x["steps_per_s"] for x in r["reports"]]) for p, r in progs.items()})
 PY

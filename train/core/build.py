@@ -87,7 +87,8 @@ def shaped_state(t: Training):
 
 
 def compile_update(t: Training, stream=sys.stdout):
-  """The update, compiled ahead of time with the state donated; says how long it should take."""
+  """(the update compiled ahead of time with the state donated, the seconds that took); says
+  beforehand how long it should take."""
   config = hashlib.sha1(json.dumps(t.plan.cfg.to_dict(), sort_keys=True).encode()).hexdigest()[:8]
   what = (f"{t.plan.task}/{config}/{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/"
           f"{t.mesh.devices.size} x {jax.default_backend()}")
@@ -103,7 +104,7 @@ def compile_update(t: Training, stream=sys.stdout):
   seconds = time.time() - t0
   compile_cache.record_compile_seconds(what, seconds)  # kept only if the longest yet
   print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)
-  return compiled
+  return compiled, seconds
 
 
 def has_evaluations(t: Training) -> bool:

@@ -121,13 +121,14 @@ def lower_group(t: Training, n: int, tasks: TaskData | None = None):
 
 
 def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = None):
-  """update(states) of n runs (lower_group's), compiled ahead of time."""
+  """(update(states) of n runs (lower_group's) compiled ahead of time, the seconds that took)."""
   stream = stream or sys.stdout  # as it is now (a test's capture), not as it was at import
   print(f"compiling the training step of {n} runs in one program ...", file=stream, flush=True)
   t0 = time.time()
   compiled = lower_group(t, n, tasks).compile()
-  print(f"compiled in {time.time() - t0:,.0f} s", file=stream, flush=True)
-  return compiled if tasks is None else (lambda states: compiled(states, tasks))
+  seconds = time.time() - t0
+  print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)
+  return (compiled if tasks is None else (lambda states: compiled(states, tasks))), seconds
 
 
 def run_tags(plans: list[RunPlan]) -> list[str]:
@@ -193,7 +194,9 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
   ahead.start(options.compile_ahead, (evaluate, probe), states)  # compiling beside the update's compilation
-  update = compile_group(t, len(plans), tasks=tasks)
+  update, seconds = compile_group(t, len(plans), tasks=tasks)
+  for db, plan in zip(dbs, plans):
+    db.compiled(plan.run_id, 0, seconds)
   parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
                    lambda summary, i=i: on_end(i, summary), tag) for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]
   shared = [s for s in (evaluate, probe) if s is not None]

@@ -84,7 +84,8 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
   plan = t.plan
   evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
   ahead.start(options.compile_ahead, (evaluate, probe), state)  # compiling beside the update's compilation
-  update = compile_update(t)
+  update, seconds = compile_update(t)
+  db.compiled(plan.run_id, start_step, seconds)
   primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
   reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,
                       os.path.join(plan.out_dir, "tb") if primary else None,
