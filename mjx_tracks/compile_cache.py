@@ -15,19 +15,25 @@ def cache_dir() -> pathlib.Path:
 
 
 def enable() -> pathlib.Path:
-  """Turns the persistent cache on for every compilation over 1 s; returns its directory."""
+  """Turns the persistent cache on for every compilation over 1 s, and (unless
+  MJX_TRACKS_COMPILE_LOCK=0) makes the processes sharing it compile each program once: one waits
+  while another compiles a program it needs, then loads it (mjx_tracks.jax_private); returns its
+  directory."""
   import jax  # noqa: PLC0415
   path = cache_dir()
   path.mkdir(parents=True, exist_ok=True)
   jax.config.update("jax_compilation_cache_dir", str(path))
   jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
   jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+  if os.environ.get("MJX_TRACKS_COMPILE_LOCK", "1") != "0":
+    from mjx_tracks import jax_private  # noqa: PLC0415
+    jax_private.serialize_compilations(str(path / "locks"))
   if os.environ.get("MJX_TRACKS_COMPILE_LOG"):
     log_compilations(os.environ["MJX_TRACKS_COMPILE_LOG"])
   return path
 
 
-_COMPILE_EVENTS = ("Finished ", "Persistent compilation cache hit", "Persistent compilation cache miss")
+_COMPILE_EVENTS = ("Finished ", "Persistent compilation cache hit", "PERSISTENT COMPILATION CACHE MISS", "Waited ")
 
 
 def log_compilations(path: str) -> None:
@@ -44,7 +50,7 @@ def log_compilations(path: str) -> None:
         with open(path, "a") as f:
           f.write(f"{os.getpid()}\t{test}\t{msg[:200]}\n")
 
-  for name in ("jax._src.dispatch", "jax._src.compiler"):
+  for name in ("jax._src.dispatch", "jax._src.compiler", "mjx_tracks.compile_lock"):
     logger = logging.getLogger(name)
     if not any(type(h).__name__ == "_Events" for h in logger.handlers):
       logger.setLevel(logging.DEBUG)

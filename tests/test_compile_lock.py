@@ -1,0 +1,76 @@
+"""Two processes that need the same program at once compile it once (mjx_tracks.jax_private,
+switched on by compile_cache.enable): the second waits on the first's lock, then loads the program
+from the persistent cache. Also fails where a JAX upgrade moves the private compiler API it hooks."""
+
+import inspect
+import os
+import subprocess
+import sys
+import time
+
+from mjx_tracks import jax_private
+
+# A process that compiles one program under the lock, with the persistent cache storing every program;
+# it writes ROLE-compiling when XLA starts compiling that program, and the role "first" then holds
+# (inside the lock) until the file "go" exists.
+WORKER = """
+import os, sys, time
+role, folder, nonce = sys.argv[1], sys.argv[2], float(sys.argv[3])
+import jax, jax.numpy as jnp
+from jax._src import compiler
+from mjx_tracks import compile_cache
+compile_cache.enable()
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+real = compiler.backend_compile_and_load
+def compiling(backend, module, *args, **kwargs):
+  if "lambda" in str(module.operation.attributes["sym_name"]):  # not the small programs around it
+    open(os.path.join(folder, role + "-compiling"), "w").close()
+    while role == "first" and not os.path.exists(os.path.join(folder, "go")):
+      time.sleep(0.02)
+  return real(backend, module, *args, **kwargs)
+compiler.backend_compile_and_load = compiling
+out = jax.jit(lambda x: jnp.sin(x) * nonce + jnp.cos(x)).lower(jax.ShapeDtypeStruct((5,), jnp.float32)).compile()
+print("ran", float(out(jnp.ones(5, jnp.float32))[0]))
+"""
+
+
+def _wait(predicate, what: str, timeout_s: float = 60.0) -> None:
+  t_end = time.time() + timeout_s
+  while not predicate():
+    assert time.time() < t_end, f"no {what} within {timeout_s} s"
+    time.sleep(0.02)
+
+
+def test_the_hook_is_installed_on_the_private_api_it_expects():
+  from jax._src import compiler
+  assert jax_private.installed()  # by tests/conftest.py's compile_cache.enable()
+  assert list(inspect.signature(compiler._cache_read).parameters) == [
+      "module_name", "cache_key", "compile_options", "backend", "executable_devices"]
+  hooked = inspect.signature(compiler.compile_or_get_cached)
+  assert list(hooked.parameters)[:6] == ["backend", "computation", "devices", "compile_options", "host_callbacks",
+                                        "executable_devices"]
+  assert "_compile_and_write_cache(" in inspect.getsource(compiler.compile_or_get_cached)
+
+
+def test_a_program_two_processes_need_at_once_is_compiled_by_one(tmp_path):
+  folder, log = str(tmp_path), str(tmp_path / "compile.log")
+  env = {k: v for k, v in os.environ.items() if k != "MJX_TRACKS_COMPILE_LOCK"}
+  env.update(MJX_TRACKS_CACHE=str(tmp_path / "cache"), MJX_TRACKS_COMPILE_LOG=log, JAX_PLATFORMS="cpu")
+
+  def start(role):
+    return subprocess.Popen([sys.executable, "-c", WORKER, role, folder, "1.25"], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+  first = start("first")
+  _wait(lambda: os.path.exists(os.path.join(folder, "first-compiling")), "compilation in the first process")
+  second = start("second")
+  missed = lambda: os.path.exists(log) and any(  # noqa: E731
+      line.startswith(f"{second.pid}\t") and "CACHE MISS for 'jit__lambda'" in line for line in open(log))
+  _wait(missed, "cache miss in the second process")
+  time.sleep(0.5)  # the second is at the lock now (its miss is logged just before)
+  open(os.path.join(folder, "go"), "w").close()
+  outs = [p.communicate(timeout=120)[0] for p in (first, second)]
+  assert [p.returncode for p in (first, second)] == [0, 0], outs
+  assert outs[0].splitlines()[-1] == outs[1].splitlines()[-1]  # the same program's result
+  assert not os.path.exists(os.path.join(folder, "second-compiling"))  # XLA never compiled it there
+  waited = [line for line in open(log) if line.startswith(f"{second.pid}\t") and "Waited" in line]
+  assert len(waited) == 1 and "jit__lambda" in waited[0] and "loaded from the cache" in waited[0], waited
