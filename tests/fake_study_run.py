@@ -42,6 +42,7 @@ def _begin(a, out: str, seed: str, task: str, db: ExperimentDB) -> dict:
   program = a.seeds + "".join(f" x {x}" for x in (a.tasks, a.early_stops) if x) if a.seeds else str(meta["seed"])
   meta.setdefault("programs", []).append(program)
   db.start(meta["run_id"], meta["task"], "ppo", "cpu", meta["seed"], {}, out, meta["steps"])
+  db.compiled(meta["run_id"], 0, 0.0)  # as train.run records its training step's compilation (none here)
   os.makedirs(os.path.join(out, "checkpoints"), exist_ok=True)
   json.dump(meta, open(meta_path, "w"))
   return meta

@@ -25,6 +25,7 @@ from train.study.cluster import local_cluster
 from train.study.executor import STUDY_DB, StudyRunner, cell_folder, next_attempt, starts_afresh
 from train.study.spec import cells, study_from_dict
 from train.study.report import write_report
+from train.study import timeline
 from train.study.status import summary
 
 FAKE = str(pathlib.Path(__file__).with_name("fake_study_run.py"))
@@ -241,6 +242,20 @@ def test_sigterm_to_a_study_stops_its_runs_with_their_checkpoints_and_leaves_not
   assert not list(scratch.glob(prefix))
 
 
+def _the_timeline_shows_each_pack_as_one_program_then_the_retries(folder: str, spec) -> None:
+  """`python -m train.study timeline`: the two packs (3 runs each), then seeds 0 and 1 of each task
+  retried alone; each program's events in order (the database's times are to the second)."""
+  progs = timeline.programs(folder)
+  assert sorted(p.cells for p in progs[:2]) == sorted(tuple(f"g/{t}/400/s{s}" for s in (0, 1, 2)) for t in spec.tasks)
+  assert sorted(p.cells for p in progs[2:]) == sorted((f"g/{t}/400/s{s}",) for t in spec.tasks for s in (0, 1))
+  for p in progs:
+    assert int(p.started) <= p.compiled <= p.trained <= p.ended + 1 and not p.stopped
+  assert max(p.started for p in progs[:2]) < min(p.started for p in progs[2:])  # the retries after the packs
+  said = timeline.lines("t", progs)
+  assert said[0].startswith("study t: ") and "6 programs of 6 runs" in said[0] and len(said) == 8
+  assert said[2].split()[:3] == [progs[0].cells[0], "+2", "3"]
+
+
 def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_own(tmp_path):
   """pack_seeds: a group's fresh runs that differ only in their seed are one train.run --seeds
   process per task (both tasks' packs at once, one slot each); each run's folder, records and
@@ -280,6 +295,7 @@ def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_ow
   starts = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["started"] for t in spec.tasks)
   ends = sorted(state[f"g/{t}/400/s0"]["attempts"][0]["ended"] for t in spec.tasks)
   assert starts[1] < ends[0]  # the two packs ran at once
+  _the_timeline_shows_each_pack_as_one_program_then_the_retries(folder, spec)
   [mine] = os.listdir(os.path.join(folder, ".handoff"))  # the study process's handoff folder
   assert os.listdir(os.path.join(folder, ".handoff", mine)) == ["token"]  # every folder moved in was taken
   assert all(a["returned"] == "moved" for c in state.values() for a in c["attempts"])  # all, the retries too

@@ -3,6 +3,7 @@ of one in configs/studies/) on a Dask cluster: by default one started here (a wo
 slots), or an existing one (--scheduler). Finished runs of an earlier start are skipped; --plan
 lists the runs and stops. `python -m train.study status NAME [--runs]`: where it stands;
 `python -m train.study report NAME`: STUDY/report.md with statistics and figures;
+`python -m train.study timeline NAME`: when each of its programs started, compiled, trained and ended;
 `python -m train.study merge DEST SRC...`: runs finished in other folders of the study into DEST."""
 
 from __future__ import annotations
@@ -43,6 +44,9 @@ def main(argv=None) -> int:
   if argv[:1] == ["report"]:
     from train.study.report import main as report_main  # noqa: PLC0415
     return report_main(argv[1:])
+  if argv[:1] == ["timeline"]:
+    from train.study.timeline import main as timeline_main  # noqa: PLC0415
+    return timeline_main(argv[1:])
   if argv[:1] == ["merge"]:
     from train.study.merge import main as merge_main  # noqa: PLC0415
     return merge_main(argv[1:])

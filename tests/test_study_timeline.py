@@ -1,0 +1,34 @@
+"""`python -m train.study timeline`, read from a committed study (results/studies/paper-packed: the
+paper study on one H200 on 2026-11-28, two programs side by side). The figures it must give are
+those read from that study's database by hand on the day (docs/benchmarks.md): the PPO program ended
+at 712 s, the SAC program's runs ended their training at 975-982 s and its evaluations at 1,033 s."""
+
+import os
+
+from train.study import timeline
+from train.study.__main__ import main as study_main
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+STUDIES = os.path.join(ROOT, "results", "studies")
+
+
+def test_the_paper_study_on_one_gpu_reads_as_two_programs_with_the_figures_found_by_hand():
+  progs = timeline.programs(os.path.join(STUDIES, "paper-packed"))
+  assert [len(p.cells) for p in progs] == [40, 20] and all(p.worker == "gpu0" for p in progs)
+  sac, ppo = progs
+  t0 = min(p.started for p in progs)
+  assert round(sac.ended - t0) == 1_033 and round(ppo.ended - t0) == 712
+  assert 975 <= sac.trained - t0 <= 983 and ppo.trained < ppo.ended
+  assert sac.compiled is None and ppo.compiled is None  # run before train.run recorded its compilation
+  assert all(c.startswith("paper-sac") for c in sac.cells) and all(c.startswith("ppo/") for c in ppo.cells)
+
+
+def test_the_command_prints_one_line_per_program_and_refuses_a_missing_study(capsys):
+  assert study_main(["timeline", "paper-packed", "--root", STUDIES]) == 0
+  said = capsys.readouterr().out.splitlines()
+  assert said[0] == ("study paper-packed: 1,033 s from its first start to its last end; 2 programs of 60 runs "
+                     "(s from the first start; -: not recorded)")
+  assert said[2].split() == ["paper-sac/asc-inc-cog/20000/s0", "+39", "40", "gpu0", "0", "-", "982", "1,033"]
+  assert study_main(["timeline", "nope", "--root", STUDIES]) == 2
+  err = capsys.readouterr().err
+  assert "no study in" in err and "state.json is missing" in err and len(err.strip().splitlines()) == 1

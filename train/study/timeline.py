@@ -1,0 +1,121 @@
+"""`python -m train.study timeline NAME [--root studies]`: when each program of a study ran, read from
+its folder (state.json: which runs trained together in one program) and its database (each attempt's
+run; each run's `compiled` and end-of-training events): per program its runs, its worker, and the
+seconds from the study's first start to the program's start, to its training step compiled, to its
+training ended (its last run's) and to its attempt ended (evaluations included)."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime
+import os
+import sys
+
+from train.db import STATUS_EVENT, read_only
+from train.study.executor import STUDY_DB, read_cells
+
+TRAINING_ENDS = frozenset(STATUS_EVENT.values())  # the events a training session ends with
+
+
+@dataclasses.dataclass(frozen=True)
+class Program:
+  """One attempt of one run, or of a pack of runs trained as one program; times in s since the epoch
+  (None: not recorded, e.g. `compiled` before 2026-11-29, or an attempt that has not ended);
+  stopped: the study's own stop ended it (no end recorded)."""
+  cells: tuple[str, ...]
+  worker: str | None
+  started: float
+  compiled: float | None
+  trained: float | None
+  ended: float | None
+  stopped: bool = False
+
+
+def _epoch(iso: str) -> float:
+  return datetime.datetime.fromisoformat(iso).timestamp()
+
+
+def _attempts(folder: str) -> dict[tuple, list[tuple[str, int, dict]]]:
+  """state.json's attempts grouped by program -> [(cell id, attempt number from 1, attempt record)].
+  A program is a cell's attempt, or the k-th attempt of a pack (its cells' attempts that list the
+  same pack for the k-th time)."""
+  grouped: dict = {}
+  for cid, cell in read_cells(folder).items():
+    seen: dict[tuple, int] = {}
+    for number, attempt in enumerate(cell["attempts"], start=1):
+      pack = tuple(attempt.get("pack") or (cid, number))
+      seen[pack] = seen.get(pack, 0) + 1
+      grouped.setdefault((pack, seen[pack]), []).append((cid, number, attempt))
+  return grouped
+
+
+def _database(db: str) -> tuple[dict[tuple[str, int], str], dict[str, list[tuple[str, float]]]]:
+  """({(cell, attempt number): run id}, {run id: [(event, time s)]}) of the study's database."""
+  with read_only(db) as c:
+    runs = {(cell, n): run_id for cell, n, run_id in c.execute("SELECT cell, attempt, run_id FROM attempts")}
+    events: dict = {}
+    for run_id, event, time in c.execute("SELECT run_id, event, time FROM events ORDER BY rowid"):
+      events.setdefault(run_id, []).append((event, _epoch(time)))
+  return runs, events
+
+
+def _program(members: list[tuple[str, int, dict]], runs: dict, events: dict) -> Program:
+  attempts = [a for _, _, a in members]
+  start, ends = min(a["started"] for a in attempts), [a.get("ended") for a in attempts]
+  end = None if None in ends else max(ends)
+  # this attempt's events (a resumed run's database holds its earlier attempts' too; times to the second)
+  mine = [(e, t) for cid, n, _ in members for e, t in events.get(runs.get((cid, n)), ())
+          if t >= int(start) and (end is None or t <= end + 1)]
+  compiled = [t for e, t in mine if e == "compiled"]
+  trained = [t for e, t in mine if e in TRAINING_ENDS]
+  return Program(tuple(cid for cid, _, _ in members), attempts[0].get("worker"), start,
+                 min(compiled) if compiled else None, max(trained) if trained else None, end,
+                 any(a.get("stopped") for a in attempts))
+
+
+def programs(folder: str) -> list[Program]:
+  """Every attempt of the study's runs, a pack's as one program, in the order they started.
+  FileNotFoundError where the folder holds no study (state.json) or no database."""
+  db = os.path.join(folder, STUDY_DB)
+  grouped = _attempts(folder)
+  if not os.path.exists(db):
+    raise FileNotFoundError(db)
+  runs, events = _database(db)
+  return sorted((_program(m, runs, events) for m in grouped.values()), key=lambda p: (p.started, p.cells))
+
+
+def lines(name: str, progs: list[Program]) -> list[str]:
+  """What `timeline` prints: the study's span, then one line per program (s since its first start)."""
+  if not progs:
+    return [f"study {name}: no attempt has started"]
+  t0 = min(p.started for p in progs)
+  ends = [p.ended for p in progs if p.ended is not None]
+  running = sum(p.ended is None and not p.stopped for p in progs)
+  span = f"{max(ends) - t0:,.0f} s from its first start to its last end" if ends else "no attempt has ended"
+  span += f", {running} programs not ended" if running else ""
+  out = [f"study {name}: {span}; {len(progs)} programs of {len({c for p in progs for c in p.cells})} runs "
+         f"(s from the first start; -: not recorded)",
+         f"{'program (its first run, + the others)':<48} {'runs':>4}  {'worker':<8} {'start':>7} {'compiled':>9} "
+         f"{'trained':>8} {'ended':>7}"]
+  at = lambda t: "-" if t is None else f"{t - t0:,.0f}"  # noqa: E731
+  for p in progs:
+    first = p.cells[0] + (f" +{len(p.cells) - 1}" if len(p.cells) > 1 else "")
+    ended = "stopped" if p.stopped and p.ended is None else at(p.ended)
+    out.append(f"{first:<48} {len(p.cells):>4}  {str(p.worker or '-'):<8} {at(p.started):>7} {at(p.compiled):>9} "
+               f"{at(p.trained):>8} {ended:>7}")
+  return out
+
+
+def main(argv: list[str]) -> int:
+  p = argparse.ArgumentParser(prog="python -m train.study timeline", description=__doc__.splitlines()[0])
+  p.add_argument("name", help="the study's name (its folder under --root)")
+  p.add_argument("--root", default="studies")
+  args = p.parse_args(argv)
+  folder = os.path.join(args.root, args.name)
+  try:
+    print("\n".join(lines(args.name, programs(folder))))
+  except FileNotFoundError as e:
+    print(f"error: no study in {folder} ({os.path.basename(e.filename or str(e))} is missing)", file=sys.stderr)
+    return 2
+  return 0
