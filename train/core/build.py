@@ -86,9 +86,10 @@ def shaped_state(t: Training):
                                 t.abstract, t.shardings)
 
 
-def compile_update(t: Training, stream=sys.stdout):
+def compile_update(t: Training, stream=None):
   """(the update compiled ahead of time with the state donated, the seconds that took); says
-  beforehand how long it should take."""
+  beforehand how long it should take (on stream, default: sys.stdout as it is at the call)."""
+  stream = stream or sys.stdout  # not the one at import: a caller may have redirected it since
   config = hashlib.sha1(json.dumps(t.plan.cfg.to_dict(), sort_keys=True).encode()).hexdigest()[:8]
   what = (f"{t.plan.task}/{config}/{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/"
           f"{t.mesh.devices.size} x {jax.default_backend()}")

@@ -25,10 +25,10 @@ EXIT_CODE = {signal.SIGINT: 130, signal.SIGTERM: 143}  # 128 + signal number, as
 class StopRequest:
   """Installed for the duration of a `with` block; `requested` is the first signal, if any."""
 
-  def __init__(self, stream=sys.stderr):
+  def __init__(self, stream=None):
     self.requested: int | None = None
     self.requested_at = 0.0  # time.monotonic() of the first request
-    self.stream = stream
+    self.stream = stream or sys.stderr  # as it is now, not at import (a caller may have redirected it)
     self._old = {}
     self._old_fd = -1
     self._reader = self._writer = None

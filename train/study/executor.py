@@ -141,7 +141,7 @@ def _progress(name: str, state: StudyState, t0: float, finished_now: int, runnin
 class StudyRunner:
   """Submits a study's unfinished cells to a Dask client and follows them to the end."""
 
-  def __init__(self, spec: StudySpec, folder: str, client, commands=(TRAIN, EVALUATE), stream=sys.stdout,
+  def __init__(self, spec: StudySpec, folder: str, client, commands=(TRAIN, EVALUATE), stream=None,
                backends: tuple[str, ...] = ("gpu", "cpu"), progress_every: float = 60.0,
                mirror_db: str | None = None, move_folders: bool = True):
     """backends: the worker kinds the cluster has; a cell whose backend is missing runs on the other;
@@ -150,7 +150,8 @@ class StudyRunner:
     study's filesystem move run folders into it (False: every folder comes back as a tar)."""
     self.progress_every, self.mirror_db = progress_every, mirror_db
     self.cancel = threading.Event()  # set from another thread: the study's tasks are cancelled, run() returns
-    self.spec, self.folder, self.client, self.commands, self.stream = spec, folder, client, commands, stream
+    self.spec, self.folder, self.client, self.commands = spec, folder, client, commands
+    self.stream = stream or sys.stdout  # as it is now, not at import
     self.backends = backends
     self.cells = {c.id: c for c in cells(spec)}
     self.submitted: list = []  # every attempt's future, in order
@@ -347,10 +348,11 @@ def run_processes(commands) -> list:
   return found
 
 
-def run_until_done_or_stopped(runner: StudyRunner, stream=sys.stderr) -> int:
+def run_until_done_or_stopped(runner: StudyRunner, stream=None) -> int:
   """Runs the study to its end (exit 0, or 1 if a run failed); on Ctrl-C or SIGTERM (which a
   scheduler sends to this process alone) its runs on this machine are stopped with a checkpoint and
   recorded (StudyRunner.drain), exit 130 / 143. The client, and a cluster it started, close either way."""
+  stream = stream or sys.stderr  # as it is now, not at import
   signals: list[int] = []
 
   def on_sigterm(signum, _):
