@@ -42,13 +42,12 @@ def _wait(predicate, what: str, timeout_s: float = 60.0) -> None:
 
 
 def test_the_hook_is_installed_on_the_private_api_it_expects():
+  """The private functions as mjx_tracks.jax_private knows them (jax 0.10: _cache_read without
+  host_callbacks; 0.11: with), and the call on a cache miss that it hooks."""
   from jax._src import compiler
-  assert jax_private.installed()  # by tests/conftest.py's compile_cache.enable()
-  assert list(inspect.signature(compiler._cache_read).parameters) == [
-      "module_name", "cache_key", "compile_options", "backend", "executable_devices"]
-  hooked = inspect.signature(compiler.compile_or_get_cached)
-  assert list(hooked.parameters)[:6] == ["backend", "computation", "devices", "compile_options", "host_callbacks",
-                                        "executable_devices"]
+  assert jax_private.hookable() and jax_private.installed()  # by tests/conftest.py's compile_cache.enable()
+  read = list(inspect.signature(compiler._cache_read).parameters)
+  assert read in (list(jax_private.CACHE_READ[:5]), list(jax_private.CACHE_READ)), read
   assert "_compile_and_write_cache(" in inspect.getsource(compiler.compile_or_get_cached)
 
 
