@@ -105,7 +105,7 @@ def test_stop_cancel_and_a_server_restart_that_resumes_the_run(tmp_path, cluster
   try:
     (run,) = [r for r in client.get("/api/runs").json() if r["task"] == "asc-inc-cog"]
     assert run["status"] == "running" and first in launcher.futures
-    assert [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]] == ["started"]
+    assert [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]] == ["started", "compiled"]
     assert client.post(f"/api/runs/{run['run_id']}/stop").json()["detail"].endswith("stop requested")
     stopped = _wait(client, first, "stopped")
     assert stopped["rc"] == 143 and client.get(f"/api/runs/{run['run_id']}").json()["status"] == "interrupted"
@@ -121,7 +121,7 @@ def test_stop_cancel_and_a_server_restart_that_resumes_the_run(tmp_path, cluster
     assert client.post(f"/api/runs/{run['run_id']}/stop").json()["detail"].endswith("stop requested")
     assert _wait(client, resumed.json()["id"], "stopped")["rc"] == 143
     events = [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]]
-    assert events == ["started", "interrupted", "resumed", "interrupted"]
+    assert events == ["started", "compiled", "interrupted", "resumed", "compiled", "interrupted"]
   finally:
     launcher.stop()
 
