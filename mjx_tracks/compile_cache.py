@@ -50,7 +50,7 @@ def log_compilations(path: str) -> None:
         with open(path, "a") as f:
           f.write(f"{os.getpid()}\t{test}\t{msg[:200]}\n")
 
-  for name in ("jax._src.dispatch", "jax._src.compiler", "mjx_tracks.compile_lock"):
+  for name in ("jax._src.dispatch", "jax._src.compiler", "mjx_tracks.jax_private"):
     logger = logging.getLogger(name)
     if not any(type(h).__name__ == "_Events" for h in logger.handlers):
       logger.setLevel(logging.DEBUG)

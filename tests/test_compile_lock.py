@@ -45,7 +45,9 @@ def test_the_hook_is_installed_on_the_private_api_it_expects():
   """The private functions as mjx_tracks.jax_private knows them (jax 0.10: _cache_read without
   host_callbacks; 0.11: with), and the call on a cache miss that it hooks."""
   from jax._src import compiler
-  assert jax_private.hookable() and jax_private.installed()  # by tests/conftest.py's compile_cache.enable()
+  assert jax_private.hookable()
+  # installed by tests/conftest.py's compile_cache.enable(), unless the suite runs with it off
+  assert jax_private.installed() == (os.environ.get("MJX_TRACKS_COMPILE_LOCK", "1") != "0")
   read = list(inspect.signature(compiler._cache_read).parameters)
   assert read in (list(jax_private.CACHE_READ[:5]), list(jax_private.CACHE_READ)), read
   assert "_compile_and_write_cache(" in inspect.getsource(compiler.compile_or_get_cached)
@@ -60,16 +62,39 @@ def test_a_program_two_processes_need_at_once_is_compiled_by_one(tmp_path):
     return subprocess.Popen([sys.executable, "-c", WORKER, role, folder, "1.25"], env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
   first = start("first")
-  _wait(lambda: os.path.exists(os.path.join(folder, "first-compiling")), "compilation in the first process")
-  second = start("second")
-  missed = lambda: os.path.exists(log) and any(  # noqa: E731
-      line.startswith(f"{second.pid}\t") and "CACHE MISS for 'jit__lambda'" in line for line in open(log))
-  _wait(missed, "cache miss in the second process")
-  time.sleep(0.5)  # the second is at the lock now (its miss is logged just before)
-  open(os.path.join(folder, "go"), "w").close()
-  outs = [p.communicate(timeout=120)[0] for p in (first, second)]
+  procs = [first]
+  try:
+    _wait(lambda: os.path.exists(os.path.join(folder, "first-compiling")), "compilation in the first process")
+    second = start("second")
+    procs.append(second)
+    missed = lambda: os.path.exists(log) and any(  # noqa: E731
+        line.startswith(f"{second.pid}\t") and "CACHE MISS for 'jit__lambda'" in line for line in open(log))
+    _wait(missed, "cache miss in the second process")
+    time.sleep(0.5)  # the second is at the lock now (its miss is logged just before)
+    open(os.path.join(folder, "go"), "w").close()
+    outs = [p.communicate(timeout=120)[0] for p in (first, second)]
+  finally:
+    for p in procs:
+      if p.poll() is None:
+        p.kill()
   assert [p.returncode for p in (first, second)] == [0, 0], outs
   assert outs[0].splitlines()[-1] == outs[1].splitlines()[-1]  # the same program's result
   assert not os.path.exists(os.path.join(folder, "second-compiling"))  # XLA never compiled it there
   waited = [line for line in open(log) if line.startswith(f"{second.pid}\t") and "Waited" in line]
   assert len(waited) == 1 and "jit__lambda" in waited[0] and "loaded from the cache" in waited[0], waited
+
+
+def test_a_lock_that_cannot_be_had_leaves_the_compilation_to_go_on_unlocked(tmp_path, monkeypatch):
+  """_acquire gives up (None) where the lock file cannot be made, and after WAIT_MAX_S where another
+  holder never lets go (here another open file of this process), having waited that long."""
+  import fcntl
+  assert jax_private._acquire(str(tmp_path / "no-such-folder" / "x.lock"), "m") == (None, 0.0)
+  path = str(tmp_path / "x.lock")
+  with open(path, "a") as holder:
+    fcntl.flock(holder, fcntl.LOCK_EX)
+    monkeypatch.setattr(jax_private, "WAIT_MAX_S", 0.3)
+    lock, waited = jax_private._acquire(path, "m")
+    assert lock is None and waited >= 0.3
+  lock, waited = jax_private._acquire(path, "m")  # free again
+  assert lock is not None and waited < 0.3
+  lock.close()

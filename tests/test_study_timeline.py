@@ -32,3 +32,15 @@ def test_the_command_prints_one_line_per_program_and_refuses_a_missing_study(cap
   assert study_main(["timeline", "nope", "--root", STUDIES]) == 2
   err = capsys.readouterr().err
   assert "no study in" in err and "state.json is missing" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_study_without_its_database_yet_shows_when_its_programs_started(tmp_path):
+  """A study whose first attempt has not ended has state.json and no study.sqlite yet: its
+  programs' starts and ends from state.json, no run events."""
+  import shutil
+  folder = tmp_path / "paper-packed"
+  folder.mkdir()
+  shutil.copy(os.path.join(STUDIES, "paper-packed", "state.json"), folder / "state.json")
+  progs = timeline.programs(str(folder))
+  assert [len(p.cells) for p in progs] == [40, 20]
+  assert all(p.compiled is None and p.trained is None and p.ended is not None for p in progs)

@@ -66,7 +66,8 @@ SCHEMA = SCHEMA.format(  # the metric columns: mjx_tracks.metrics
 STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", *REPORT_COLUMN.values(), "source")
 STAT_SOURCES = ("train", "eval", "probe")  # training episodes, Brax's evaluator (uniform scenes), train.core.probe
 OLD_SOURCES = {"hardest": "probe"}  # a source's name in databases written before it was renamed
-# "compiled": the training step compiled (its detail: the seconds it took, e.g. "34.215"; train.bench.runs reads it)
+# "compiled": the training step compiled (its detail: the seconds until it was ready, e.g. "34.215", a wait for
+# another process compiling it included: mjx_tracks.jax_private; train.bench.runs reads it)
 EVENTS = ("started", "resumed", "compiled", "checkpoint", "finished", "interrupted", "failed", "crashed")
 # a run's final status -> the event that records it
 STATUS_EVENT = {"done": "finished", "stopped_early": "finished", "interrupted": "interrupted",

@@ -25,8 +25,9 @@ import sys
 import tempfile
 import time
 
-from mjx_tracks.compile_cache import longest_compilations
-from train.bench import runs
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+from mjx_tracks.compile_cache import longest_compilations  # noqa: E402
+from train.bench import runs  # noqa: E402
 
 VARIANTS = {  # name -> XLA_FLAGS added to the environment's
     "default": "",

@@ -8,8 +8,9 @@
 # CUDA_MPS_ACTIVE_THREAD_PERCENTAGE (train.study's: train.study.mps.SM_SHARE, 85) and its
 # CUDA_MPS_CLIENT_PRIORITY (0 normal, 1 below normal: NVIDIA's MPS manual); the SAC program runs at
 # SM_SHARE and priority 0, as train.study starts it. Writes $OUT/mps-pair.json: each variant's
-# programs' training-step compile seconds and training steps/s per run at each report (the median over
-# its runs' training rows), read from each program's database by train.bench.runs, and prints them. Figures
+# programs' training-step compile seconds (the first variant's from an empty cache, the next ones' mostly
+# loaded from the shared one) and training steps/s per run at each report (the median over its runs'
+# training rows), read from each program's database by train.bench.runs, and prints them. Figures
 # are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
 # Measured: results/speed/group/mps-pair-priority-H200-2026-11-28.json (docs/benchmarks.md).
 # Usage: EACH=270 bash scripts/gpu/mps_pair.sh 85:0 85:1
@@ -57,7 +58,9 @@ work, variants, found = sys.argv[1], sys.argv[2:], {}
 for v in variants:
   for prog in ("sac", "ppo"):
     path = os.path.join(work, v.replace(":", "-"), f"{prog}.sqlite")
-    found.setdefault(v, {})[prog] = {"compile_s": compile_seconds(path), "reports": training_rates(path)}
+    made = os.path.isfile(path)  # not where the program failed before it started its records
+    found.setdefault(v, {})[prog] = {"compile_s": compile_seconds(path) if made else None,
+                                     "reports": training_rates(path) if made else []}
 out = os.path.join(os.environ.get("OUT", "."), "mps-pair.json")
 device = os.popen("nvidia-smi --query-gpu=name,driver_version --format=csv,noheader").read().strip()
 json.dump({"device": device, "date": os.popen("date -u +%FT%TZ").read().strip(),

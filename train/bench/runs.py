@@ -7,9 +7,9 @@ from __future__ import annotations
 import os
 import statistics
 
-from train.db import ExperimentDB
+from train.db import STAT_SOURCES, ExperimentDB
 
-TRAIN_SOURCE = "train"  # the stats rows of training reports (not evaluations or probes): train.core.progress
+TRAIN_SOURCE = STAT_SOURCES[0]  # the stats rows of training reports (not evaluations or probes)
 
 
 def _db(db_path: str) -> ExperimentDB:

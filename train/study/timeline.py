@@ -21,8 +21,9 @@ TRAINING_ENDS = frozenset(STATUS_EVENT.values())  # the events a training sessio
 @dataclasses.dataclass(frozen=True)
 class Program:
   """One attempt of one run, or of a pack of runs trained as one program; times in s since the epoch
-  (None: not recorded, e.g. `compiled` before 2026-11-29, or an attempt that has not ended);
-  stopped: the study's own stop ended it (no end recorded)."""
+  (None: not recorded: `compiled` before 2026-11-29, an attempt that has not ended, or the run events
+  of an attempt still running, which the study's database links to it only once it ends);
+  stopped: the study's own stop ended it."""
   cells: tuple[str, ...]
   worker: str | None
   started: float
@@ -76,12 +77,11 @@ def _program(members: list[tuple[str, int, dict]], runs: dict, events: dict) -> 
 
 def programs(folder: str) -> list[Program]:
   """Every attempt of the study's runs, a pack's as one program, in the order they started.
-  FileNotFoundError where the folder holds no study (state.json) or no database."""
+  FileNotFoundError where the folder holds no study (state.json). A study whose first attempt has not
+  ended has no database yet: its programs' starts only."""
   db = os.path.join(folder, STUDY_DB)
   grouped = _attempts(folder)
-  if not os.path.exists(db):
-    raise FileNotFoundError(db)
-  runs, events = _database(db)
+  runs, events = _database(db) if os.path.exists(db) else ({}, {})
   return sorted((_program(m, runs, events) for m in grouped.values()), key=lambda p: (p.started, p.cells))
 
 
