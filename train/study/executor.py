@@ -79,6 +79,23 @@ def read_cells(folder: str) -> dict:
   return json.load(open(os.path.join(folder, STATE)))["cells"]
 
 
+def folder_parser(command: str, doc: str):
+  """The parser of `python -m train.study COMMAND NAME [--root studies]` (a command that reads a
+  study's folder, ROOT/NAME: status, report, timeline); its description: doc's first line."""
+  import argparse  # noqa: PLC0415
+  p = argparse.ArgumentParser(prog=f"python -m train.study {command}", description=doc.splitlines()[0])
+  p.add_argument("name", help="the study's name (its folder under --root)")
+  p.add_argument("--root", default="studies")
+  return p
+
+
+def no_study(folder: str, name: str, missing: str | None) -> int:
+  """Says in one line that ROOT/NAME holds no study (the file missing from it); exit code 2."""
+  print(f"error: no study in {folder} ({os.path.basename(missing or STATE)} is missing); start it with "
+        f"python -m train.study {name}", file=sys.stderr)
+  return 2
+
+
 def status_counts(cells: dict) -> dict[str, int]:
   """Cells per status: done, running, queued, failed."""
   out = {"done": 0, "running": 0, "queued": 0, "failed": 0}

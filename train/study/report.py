@@ -12,7 +12,7 @@ import numpy as np
 from mjx_tracks.envs.config import REWARD_SIGNALS, load_config
 from train.evaluation import ROBUST
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
-from train.study.executor import overview
+from train.study.executor import folder_parser, no_study, overview
 from train.study.figures import write_figures
 from train.study.paper import FIGURE9, PAPER_TRIALS, paper_figure
 from mjx_tracks.baselines import BASELINES, CONSTANT, SATURATED, saturated
@@ -285,18 +285,11 @@ def write_report(folder: str, command: str) -> str:
 
 
 def main(argv: list[str]) -> int:
-  import argparse  # noqa: PLC0415
-  import sys  # noqa: PLC0415
-  p = argparse.ArgumentParser(prog="python -m train.study report", description=__doc__.splitlines()[0])
-  p.add_argument("name", help="the study's name (its folder under --root)")
-  p.add_argument("--root", default="studies")
-  args = p.parse_args(argv)
+  args = folder_parser("report", __doc__).parse_args(argv)
   folder = os.path.join(args.root, args.name)
   try:
     path = write_report(folder, "python -m train.study report " + " ".join(argv))
   except FileNotFoundError as e:
-    print(f"error: no study in {folder} ({e.filename} is missing); start it with python -m train.study "
-          f"{args.name}", file=sys.stderr)
-    return 2
+    return no_study(folder, args.name, e.filename)
   print(f"report -> {path}")
   return 0

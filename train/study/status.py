@@ -11,7 +11,7 @@ import sys
 
 from train.core.run_record import run_id_in
 from train.db import read_only
-from train.study.executor import STUDY_DB, cell_folder_of, overview, read_cells
+from train.study.executor import STUDY_DB, cell_folder_of, folder_parser, no_study, overview, read_cells
 
 
 # state.json's "running" means handed to the cluster: running, or waiting there for a slot (the
@@ -58,16 +58,12 @@ def summary(folder: str, runs: bool = False) -> list[str]:
 
 
 def main(argv: list[str]) -> int:
-  p = argparse.ArgumentParser(prog="python -m train.study status", description=__doc__.splitlines()[0])
-  p.add_argument("name", help="the study's name (its folder under --root)")
-  p.add_argument("--root", default="studies")
+  p = folder_parser("status", __doc__)
   p.add_argument("--runs", action="store_true", help="one line per run")
   args = p.parse_args(argv)
   folder = os.path.join(args.root, args.name)
   try:
     print("\n".join(summary(folder, args.runs)))
-  except FileNotFoundError:
-    print(f"error: no study in {folder} (no state.json); start it with python -m train.study {args.name}",
-          file=sys.stderr)
-    return 2
+  except FileNotFoundError as e:
+    return no_study(folder, args.name, e.filename)
   return 0

@@ -13,7 +13,7 @@ import os
 import sys
 
 from train.db import STATUS_EVENT, read_only
-from train.study.executor import STUDY_DB, read_cells
+from train.study.executor import STUDY_DB, folder_parser, no_study, read_cells
 
 TRAINING_ENDS = frozenset(STATUS_EVENT.values())  # the events a training session ends with
 
@@ -108,14 +108,10 @@ def lines(name: str, progs: list[Program]) -> list[str]:
 
 
 def main(argv: list[str]) -> int:
-  p = argparse.ArgumentParser(prog="python -m train.study timeline", description=__doc__.splitlines()[0])
-  p.add_argument("name", help="the study's name (its folder under --root)")
-  p.add_argument("--root", default="studies")
-  args = p.parse_args(argv)
+  args = folder_parser("timeline", __doc__).parse_args(argv)
   folder = os.path.join(args.root, args.name)
   try:
     print("\n".join(lines(args.name, programs(folder))))
   except FileNotFoundError as e:
-    print(f"error: no study in {folder} ({os.path.basename(e.filename or str(e))} is missing)", file=sys.stderr)
-    return 2
+    return no_study(folder, args.name, e.filename)
   return 0
