@@ -44,3 +44,10 @@ def test_a_study_without_its_database_yet_shows_when_its_programs_started(tmp_pa
   progs = timeline.programs(str(folder))
   assert [len(p.cells) for p in progs] == [40, 20]
   assert all(p.compiled is None and p.trained is None and p.ended is not None for p in progs)
+
+
+def test_status_and_report_of_a_missing_study_say_so_in_one_line(capsys):
+  for command in ("status", "report"):
+    assert study_main([command, "nope", "--root", STUDIES]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "nope" in err and len(err.strip().splitlines()) == 1, (command, err)

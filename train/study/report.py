@@ -9,7 +9,7 @@ import os
 
 import numpy as np
 
-from mjx_tracks.envs.config import REWARD_SIGNALS, load_config
+from mjx_tracks.envs.config import REWARD_SIGNALS, ConfigError, load_config
 from train.evaluation import ROBUST
 from scenes.kinds import HARDEST, HELD_OUT, NAV, scene_kind
 from train.study.executor import folder_parser, no_study, overview
@@ -291,5 +291,9 @@ def main(argv: list[str]) -> int:
     path = write_report(folder, "python -m train.study report " + " ".join(argv))
   except FileNotFoundError as e:
     return no_study(folder, args.name, e.filename)
+  except ConfigError as e:  # e.g. no study.yaml in the folder
+    import sys  # noqa: PLC0415
+    print(f"error: {e}", file=sys.stderr)
+    return 2
   print(f"report -> {path}")
   return 0
