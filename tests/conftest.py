@@ -112,7 +112,8 @@ def ppo_run(tmp_path_factory):
 FIRST = ("test_training.py", "test_env.py", "test_training_sac.py", "test_brax_reference.py", "test_evaluator.py")
 # Files that compile the programs a FIRST file compiles start well after it, sorted among the others
 # as if named so: beside it on the other worker, both compiled them at once and neither found them in
-# the persistent cache (test_evaluator's Brax evaluator and group evaluator: ~18 s of XLA twice).
+# the persistent cache (test_evaluator's Brax evaluator and group evaluator of helpers.PACK: ~18 s of
+# XLA twice).
 LATER = {"test_compile_ahead.py": "test_t"}
 
 

@@ -19,6 +19,22 @@ def run_id(out: str) -> str:
   with open(os.path.join(out, "run.json")) as f:
     return json.load(f)["run_id"]
 
+# the SAC program of two tasks (direction, sampler and reward kind all differ) that test_task_pack,
+# test_evaluator and test_compile_ahead share, so that its evaluation programs compile once
+PACK = (("asc-inc-cog", 0), ("des-uni-ang", 1))  # (task, seed) of each run
+
+
+def pack_plans(out) -> list:
+  """The PACK's run plans (tiny SAC on the CPU, runs under out/), with Brax's evaluator: 2
+  evaluations of 4 episodes."""
+  import dataclasses  # noqa: PLC0415
+  from train.core.plan import plan_run  # noqa: PLC0415
+  from train.run import parser  # noqa: PLC0415
+  plans = [plan_run(parser().parse_args(["--task", task, "--seed", str(seed), "--algo", "sac", "--preset", "cpu", *TINY,
+                                         "--out", os.path.join(str(out), task)])) for task, seed in PACK]
+  return [dataclasses.replace(p, preset=dataclasses.replace(p.preset, num_evals=2, num_eval_envs=4)) for p in plans]
+
+
 HELD_OUT = "middle"  # the ppo_run fixture's one held-out staircase (conftest.py)
 TRAIN_TINY = ["--task", "asc-inc-cog", "--preset", "cpu", *TINY]  # the ppo_run fixture's run, less its length
 

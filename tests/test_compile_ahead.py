@@ -3,34 +3,30 @@
 nothing large and reports what it reports without it. (The runs of tests/conftest.py's ppo_run and
 tests/test_group.py's program train with it on.)"""
 
-import dataclasses
 import threading
 
 import jax
-import jax.numpy as jnp
 import pytest
 
-from helpers import TINY
+from helpers import pack_plans
 from train import evaluation
 from train.core import ahead
 from train.core.build import build
+from train.core.group import build_group, group_tasks, init_group
 from train.core.group_evaluator import GroupEvaluator
 from train.core.group_loop import run_slice
-from train.core.plan import plan_run
 from train.core.probe import GroupProbe, Probe
 from train.core.session import evaluator_of
-from train.run import parser
-
-SEEDS = [0, 3]
 
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
-  """(t, states): a tiny SAC run with Brax's evaluator (4 episodes) and two runs' fresh states."""
-  plan = plan_run(parser().parse_args(["--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", *TINY,
-                                       "--out", str(tmp_path_factory.mktemp("ahead") / "run")]))
-  t = build(dataclasses.replace(plan, preset=dataclasses.replace(plan.preset, num_evals=2, num_eval_envs=4)))
-  return t, jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in SEEDS]))
+  """(t, states, plans, single): helpers.PACK's program of two tiny SAC runs of two tasks, with
+  Brax's evaluator (4 episodes), and its fresh states; its first run as a single run (single).
+  tests/test_evaluator.py compiles the same evaluations."""
+  plans = pack_plans(tmp_path_factory.mktemp("ahead"))
+  t = build_group(plans)
+  return t, init_group(t, plans, group_tasks(t, plans)), plans, build(plans[0])
 
 
 class Compiles:
@@ -79,33 +75,35 @@ def _first_use_compiles_nothing_large_and_reports_the_same(make, use, example):
 
 
 def test_brax_s_evaluator_and_a_programs_evaluation_compiled_ahead(tiny):
-  t, states = tiny
+  t, states, plans, single = tiny
   one = run_slice(states, 0)
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: evaluator_of(t), lambda e: e(one), one)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: evaluator_of(single), lambda e: e(one), one)
   figures = [k for k in want if k.startswith("eval/episode_")]
   assert len(figures) > 10 and all(got[k] == want[k] for k in figures)
 
   def evaluate(group):
     group.at(states, 0)
     return group.result(1)
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupEvaluator(t, SEEDS), evaluate, states)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(
+      lambda: GroupEvaluator(t, [p.seed for p in plans], [p.cfg for p in plans]), evaluate, states)
   assert all(got[k] == want[k] for k in figures)
 
 
 def test_the_probe_and_a_programs_probe_compiled_ahead(tiny):
-  t, states = tiny
+  t, states, plans, single = tiny
   one = run_slice(states, 0)
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: Probe(t, trials=4), lambda p: p(one), one)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: Probe(single, trials=4), lambda p: p(one), one)
   assert want == got and 0.0 <= want["probe/progress_mean"] <= 1.0
 
   def probe(group):
     group.at(states, 0)
     return group.result(1)
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, trials=4), probe, states)
+  configs = [p.cfg for p in plans]
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, 4, configs), probe, states)
   assert want == got
   with pytest.MonkeyPatch.context() as mp:  # the runs' trials vmapped in one program, as on a GPU
     mp.setattr(evaluation, "vmapped_trials", lambda: True)
-    want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, trials=4), probe, states)
+    want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, 4, configs), probe, states)
   assert want == got
 
 

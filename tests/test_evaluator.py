@@ -1,19 +1,17 @@
 """The in-training evaluation on uniform scenes (Brax's evaluator, `[eval]` lines) of a preset that
-has one, for one run and for the runs of one program (`train.run --seeds`, every run's episodes in
-one unroll): on fresh learner states it reports finite figures over its episodes, and each run of a
-program gets what Brax's own evaluator of that run reports. (The CPU presets train without it, to
+has one, for one run and for the runs of one program (`train.run --seeds [--tasks]`, every run's
+episodes in one unroll): on fresh learner states it reports finite figures over its episodes, and
+each run of a program of two tasks gets what Brax's own evaluator of that run reports. (The CPU presets train without it, to
 keep the end-to-end tests short.)"""
 
 import dataclasses
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from helpers import TINY
+from helpers import TINY, pack_plans
 from train.core.build import brax_evaluator, build
-from train.core.group import group_evaluations
+from train.core.group import build_group, group_evaluations, group_tasks, init_group
 from train.core.group_evaluator import GroupEvaluator
 from train.core.group_loop import RunShare, run_slice
 from train.core.mesh import to_host
@@ -23,20 +21,20 @@ from train.run import parser
 
 
 def test_a_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_that_run_gives(tmp_path):
-  """GroupEvaluator against Brax's own evaluator of each run (acting.Evaluator keyed by the run's
-  seed, the run's policy alone), evaluation after evaluation: the same metrics; a run given its
-  neighbour's episodes, policy or key would differ."""
-  plan = plan_run(parser().parse_args(["--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", *TINY,
-                                       "--out", str(tmp_path / "run")]))
-  t = build(dataclasses.replace(plan, preset=dataclasses.replace(plan.preset, num_evals=2, num_eval_envs=4)))
-  seeds = [0, 3]
-  states = jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in seeds]))
-  group = GroupEvaluator(t, seeds)
-  # the single run's evaluator (the plan's seed, 0) and Brax's own for the other
-  alone = [evaluator_of(t), _keeping(brax_evaluator(t, 3), t)]
+  """GroupEvaluator of a program of two tasks (helpers.PACK) against Brax's own evaluator of each
+  run (acting.Evaluator of the run's own task, keyed by the run's seed, the run's policy alone),
+  evaluation after evaluation: the same metrics; a run given its neighbour's task, episodes, policy
+  or key would differ."""
+  plans = pack_plans(tmp_path)
+  t = build_group(plans)
+  states = init_group(t, plans, group_tasks(t, plans))
+  group = GroupEvaluator(t, [p.seed for p in plans], [p.cfg for p in plans])
+  # the first run's evaluator as a single run makes it (its plan's seed), Brax's own for the other
+  own = [build(p) for p in plans]
+  alone = [evaluator_of(own[0]), _keeping(brax_evaluator(own[1], plans[1].seed), own[1])]
   for _ in range(2):  # each run's key advances as its own evaluator's
     got = group.evaluate(states)
-    for i in range(len(seeds)):
+    for i in range(len(plans)):
       want = alone[i](run_slice(states, i))
       assert np.isfinite(want["eval/episode_reward"]) and want["eval/avg_episode_length"] > 0
       assert 0.0 <= want["eval/episode_progress"] <= 1.0 and 0.0 <= want["eval/episode_goal_reached"] <= 1.0
@@ -46,7 +44,7 @@ def test_a_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_that_run_
       # 5e-4 in pitch rate with the tiny task's 2 observed steps (measured 2026-11-26, every contact kept;
       # it passes with the culling since 2026-11-27); a neighbour's figures differ by 0.3-0.9
       for k in figures:
-        assert got[i][k] == pytest.approx(want[k], rel=2e-3, abs=1e-6), k
+        assert got[i][k] == pytest.approx(want[k], rel=2e-3, abs=1e-6), (plans[i].task, k)
   assert got[0]["eval/episode_reward"] != got[1]["eval/episode_reward"]
 
 

@@ -110,7 +110,7 @@ def test_a_stop_request_ends_every_run_of_the_program():
 
 def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
   out, database = str(tmp_path / "group"), str(tmp_path / "db.sqlite")
-  assert run.main([*TRAIN_TINY, "--seeds", "0,1", "--steps", "1024", "--out", out, "--db", database,
+  assert run.main([*TRAIN_TINY, "--seeds", "0,1", "--steps", "512", "--out", out, "--db", database,
                    "--probe-every", "512", "--checkpoint-every", "0", "--compile-ahead", "on"]) == 0
   said = capsys.readouterr().out
   assert "2 runs" in said and "in one program" in said and "s0 [train]" in said and "s1 [probe]" in said
@@ -124,11 +124,11 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
     folder = os.path.join(out, f"s{seed}")
     record = json.load(open(os.path.join(folder, "run.json")))
     assert record["seed"] == seed and record["run_id"] == runs[seed]["run_id"]
-    assert RunCheckpoints(folder).latest_step() == 1024 and os.path.isdir(os.path.join(folder, "policy"))
+    assert RunCheckpoints(folder).latest_step() == 512 and os.path.isdir(os.path.join(folder, "policy"))
     sources = {(r["source"], r["step"]) for r in d.stats(record["run_id"])}
-    assert ("train", 1024) in sources and ("probe", 512) in sources and ("probe", 1024) in sources
+    assert ("train", 512) in sources and ("probe", 512) in sources  # one update, then its probe
     params.append(RunCheckpoints(folder).restore()[0])
-    (probe,) = [r for r in d.stats(record["run_id"]) if (r["source"], r["step"]) == ("probe", 1024)]
+    (probe,) = [r for r in d.stats(record["run_id"]) if (r["source"], r["step"]) == ("probe", 512)]
     probes.append(probe)
   assert probes[0]["progress_mean"] != probes[1]["progress_mean"]
   # the program's probe (every run's trials in one rollout) reads what `train.evaluate` of the run's
@@ -144,9 +144,9 @@ def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
   assert any(np.asarray(a).shape == np.asarray(b).shape and not np.array_equal(a, b)
              for a, b in zip(*leaves))  # two seeds, two runs
   # any run of the program continues alone, as a run of its own
-  assert run.main(["--resume", os.path.join(out, "s1"), "--steps", "1536", "--db", database]) == 0
-  assert "from its checkpoint at step 1,024" in capsys.readouterr().out
-  assert RunCheckpoints(os.path.join(out, "s1")).latest_step() == 1536
+  assert run.main(["--resume", os.path.join(out, "s1"), "--steps", "1024", "--db", database]) == 0
+  assert "from its checkpoint at step 512" in capsys.readouterr().out
+  assert RunCheckpoints(os.path.join(out, "s1")).latest_step() == 1024
 
 
 def test_the_group_bench_times_single_runs_and_one_program_of_all(tmp_path, monkeypatch):

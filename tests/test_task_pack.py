@@ -2,8 +2,10 @@
 and of several early stops (`--early-stops`):
 each run's view of the program's environment starts, steps and rewards as its own task's
 environment does; each run starts from the state it would start from alone; the program's probe
-and Brax evaluation of each run are those of its own task; configs that differ beyond the data a
-program takes are refused in one line before anything is written."""
+and evaluations of each run are those of its own task (here through `train.evaluate`, which runs
+the probe's trials; Brax's evaluation of a program of several tasks: tests/test_evaluator.py);
+configs that differ beyond the data a program takes are refused in one line before anything is
+written."""
 
 import dataclasses
 import json
@@ -14,33 +16,23 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from helpers import TINY, TINY_SETTINGS
+from helpers import PACK, TINY, TINY_SETTINGS, pack_plans
 from mjx_tracks.envs.config import load_config
 from mjx_tracks.envs.task_data import packing_conflict, task_data
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from train import run
-from train.core.build import brax_evaluator, build
+from train.core.build import build
 from train.core.group import build_group, group_tasks, init_group
-from train.core.group_evaluator import GroupEvaluator
 from train.core.group_loop import run_slice
-from train.core.mesh import to_host
-from train.core.plan import plan_run
-from train.core.policy import act_from_params
-from train.evaluation import group_trial_runner
 
-ASC, DES = "asc-inc-cog", "des-uni-ang"  # direction, sampler and reward kind all differ
+(ASC, _), (DES, _) = PACK  # direction, sampler and reward kind all differ
 SAC_TINY = ["--algo", "sac", "--preset", "cpu", *TINY]
-
-
-def _plan(task: str, seed: int, out):
-  return plan_run(run.parser().parse_args(["--task", task, "--seed", str(seed), *SAC_TINY, "--out", str(out)]))
 
 
 @pytest.fixture(scope="module")
 def program(tmp_path_factory):
   """(t, plans, states): asc-inc-cog seed 0 and des-uni-ang seed 1 in one program, fresh states."""
-  out = tmp_path_factory.mktemp("pack")
-  plans = [_plan(ASC, 0, out / "a"), _plan(DES, 1, out / "d")]
+  plans = pack_plans(tmp_path_factory.mktemp("pack"))
   t = build_group(plans)
   return t, plans, init_group(t, plans, group_tasks(t, plans))
 
@@ -78,38 +70,6 @@ def test_each_run_of_a_program_of_several_tasks_starts_as_it_would_alone(program
     mine = run_slice(states, i)
     assert all(np.array_equal(np.asarray(a), np.asarray(b))
                for a, b in zip(jax.tree_util.tree_leaves(mine), jax.tree_util.tree_leaves(alone))), p.task
-
-
-def test_the_program_probes_each_run_on_its_own_tasks_probe_scene(program, monkeypatch):
-  """The probe of both runs in one rollout (as on a GPU: on the CPU one run after another,
-  train.evaluation.vmapped_trials): run 1's trials are those of the descent task's own probe runner
-  (its hardest staircase downwards), not the ascent's."""
-  from train import evaluation
-  monkeypatch.setattr(evaluation, "vmapped_trials", lambda: True)
-  t, plans, states = program
-  params = to_host(t.learner.policy_params(states))
-  act = act_from_params(t.spec)
-  both = group_trial_runner(plans[0].cfg, "hardest", act, 4, 0.5, 0, configs=[p.cfg for p in plans])(params)
-  own = group_trial_runner(plans[1].cfg, "hardest", act, 4, 0.5, 0)(params)[1]
-  for name in ("final_x", "final_z", "pitch_rate", "progress"):
-    np.testing.assert_allclose(both[1][name], own[name], rtol=1e-4, atol=1e-5, err_msg=name)
-  assert np.all(both[1]["final_z"] > 0.5) and np.all(both[0]["final_z"] < 0.5)  # down from the landing; up from the floor
-
-
-def test_the_programs_evaluation_gives_each_run_what_brax_s_evaluator_of_its_own_task_gives(program):
-  """Run 1's (the descent's; the views of run 0's own task are checked above)."""
-  t, plans, states = program
-  t = dataclasses.replace(t, plan=dataclasses.replace(t.plan, preset=dataclasses.replace(t.plan.preset, num_eval_envs=4)))
-  group = GroupEvaluator(t, [p.seed for p in plans], [p.cfg for p in plans])
-  got = group.evaluate(states)
-  for i, p in list(enumerate(plans))[1:]:
-    own = build(dataclasses.replace(p, preset=t.plan.preset))
-    want = brax_evaluator(own, p.seed).run_evaluation(to_host(own.learner.policy_params(run_slice(states, i))),
-                                                       training_metrics={})
-    figures = [k for k in want if k.startswith("eval/episode_")]
-    assert len(figures) > 10
-    for k in figures:
-      assert got[i][k] == pytest.approx(want[k], rel=2e-3, abs=1e-6), (p.task, k)
 
 
 def test_runs_evaluated_each_by_its_own_evaluator_get_their_own_tasks(program, monkeypatch):
@@ -156,7 +116,27 @@ def test_the_command_trains_each_task_with_each_seed_and_early_stop_and_records_
     db = ExperimentDB(default_path(str(folder.parent)))
     assert [r["run_id"] for r in db.runs()] == [record["run_id"]] and db.stats(record["run_id"])  # its rows, its statistics
     assert db.run(record["run_id"])["status"] == ("done" if cell.group == "whole" else "stopped_early")
+  _the_memory_check_reports_what_xla_plans_for_the_programs_states(pack_train_args(pack), capsys)
   _the_runs_evaluated_together_get_what_each_gets_alone([str(out / m) for m in pack_folders(pack)], capsys)
+
+
+def _the_memory_check_reports_what_xla_plans_for_the_programs_states(args, capsys):
+  """scripts/analysis/group_memory.py of the program the command just trained (its compiled step
+  comes from the persistent cache): the update's arguments as XLA plans them are the runs' states as
+  the project counts them (train.core.group.state_bytes); a program that cannot be is refused."""
+  import importlib.util
+  import re
+  path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "analysis", "group_memory.py")
+  spec = importlib.util.spec_from_file_location("group_memory", path)
+  script = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(script)
+  assert script.main(args) == 0
+  said = capsys.readouterr().out
+  scale = {"GB": 1e9, "MB": 1e6}
+  states, arguments = (float(x) * scale[unit] for x, unit in
+                       re.findall(r"(?:states|arguments) ([\d.]+) ([GM]B)", said))
+  assert "4 runs of 8 envs" in said and states > 0 and arguments == pytest.approx(states, rel=0.01, abs=6e3)
+  assert script.main(["--tasks", f"{ASC},asc-hard", "--seeds", "0", *SAC_TINY]) == 2
 
 
 def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
@@ -196,24 +176,6 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
     for name in ("progress", "pitch_rate", "final_x", "final_z", "length"):
       np.testing.assert_allclose(together[(f, scene)]["per_trial"][name], one_by_one["per_trial"][name],
                                  rtol=1e-4, atol=1e-5, err_msg=f"{f} {scene} {name}")
-
-
-def test_the_memory_check_reports_what_xla_plans_for_a_programs_states(capsys):
-  """scripts/analysis/group_memory.py: the update's arguments as XLA plans them are the runs' states
-  as the project counts them (train.core.group.state_bytes); a program that cannot be is refused."""
-  import importlib.util
-  import re
-  path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "analysis", "group_memory.py")
-  spec = importlib.util.spec_from_file_location("group_memory", path)
-  script = importlib.util.module_from_spec(spec)
-  spec.loader.exec_module(script)
-  assert script.main(["--tasks", f"{ASC},{DES}", "--seeds", "0", *SAC_TINY]) == 0
-  said = capsys.readouterr().out
-  scale = {"GB": 1e9, "MB": 1e6}
-  states, arguments = (float(x) * scale[unit] for x, unit in
-                       re.findall(r"(?:states|arguments) ([\d.]+) ([GM]B)", said))
-  assert "2 runs of 8 envs" in said and states > 0 and arguments == pytest.approx(states, rel=0.01, abs=6e3)
-  assert script.main(["--tasks", f"{ASC},asc-hard", "--seeds", "0", *SAC_TINY]) == 2
 
 
 @pytest.mark.parametrize("argv, words", [
