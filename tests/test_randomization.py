@@ -152,17 +152,19 @@ def test_a_push_slides_twice_as_far_on_half_the_friction(robust_core):
   """A 1 m/s push with the belts stopped: the slide v^2 / (2 mu g) doubles when every friction
   coefficient halves (same push direction: same key)."""
   core, reset, step = robust_core
-  p = _batch(core, friction=[[1, 1], [0.5, 0.5]], push_velocity=[1.0, 1.0], push_probability=[1.0, 1.0])
-  s = reset(jnp.stack([jax.random.PRNGKey(4)] * 2), p)
+  # a batch of 4 (the pair twice), the batch the test above compiles its programs for
+  p = _batch(core, friction=[[1, 1], [0.5, 0.5]] * 2, push_velocity=[1.0] * 4, push_probability=[1.0] * 4)
+  s = reset(jnp.stack([jax.random.PRNGKey(4)] * 4), p)
   xy0 = np.asarray(s.pipeline_state.data.qpos[:, :2])
-  stop = jnp.full((2, core.action_size), 0.0).at[:, 0].set(-1.0)  # v = 0, joints held
+  stop = jnp.full((4, core.action_size), 0.0).at[:, 0].set(-1.0)  # v = 0, joints held
   s = step(s, stop)
   es = s.pipeline_state
   s = s.replace(pipeline_state=es.replace(robust=es.robust.replace(
-      perturbation=es.robust.perturbation.replace(push_probability=jnp.zeros(2)))))
+      perturbation=es.robust.perturbation.replace(push_probability=jnp.zeros(4)))))
   for _ in range(3):
     s = step(s, stop)
   slide = np.linalg.norm(np.asarray(s.pipeline_state.data.qpos[:, :2]) - xy0, axis=1)
+  np.testing.assert_array_equal(slide[2:], slide[:2])  # the same pair: the same slides
   assert slide[0] > 0.03
   assert slide[1] / slide[0] == pytest.approx(2.0, rel=0.3)
 
