@@ -13,7 +13,7 @@ from distributed import Client, LocalCluster
 from fake_study_run import fake_success
 from fastapi.testclient import TestClient
 
-from train.db import ExperimentDB
+from train.db import ExperimentDB, utc_now
 from train.server.app import create_app
 from train.server.launcher import Launcher
 from train.server.settings import Settings
@@ -122,6 +122,32 @@ def test_stop_cancel_and_a_server_restart_that_resumes_the_run(tmp_path, cluster
     assert _wait(client, resumed.json()["id"], "stopped")["rc"] == 143
     events = [e["event"] for e in client.get(f"/api/runs/{run['run_id']}").json()["events"]]
     assert events == ["started", "compiled", "interrupted", "resumed", "compiled", "interrupted"]
+  finally:
+    launcher.stop()
+
+
+def test_a_restarted_server_stops_the_run_of_a_launch_cancelled_as_the_server_stopped(tmp_path, cluster, monkeypatch):
+  """A launch cancelled while its run started (its process not yet known to the cancel) and the
+  server stopped before a tick could stop the run: the restarted server follows the launch and
+  stops its run, rather than leave it holding the cluster's slot (here 30 s)."""
+  monkeypatch.setenv("FAKE_SLOW_SEED", "0")  # 1 s per 100 steps
+  client, launcher = _server(tmp_path, cluster)
+  lid = client.post("/api/launches", json={"task": "asc-inc-cog", "steps": 3000, "seed": 0}).json()["id"]
+  db = ExperimentDB(str(tmp_path / "runs" / "experiments.sqlite"))
+  t_end = time.time() + 60
+  while not [r for r in db.runs() if r["status"] == "running"]:
+    assert time.time() < t_end
+    time.sleep(0.1)
+  launcher.stop()
+  db.set_launch(lid, status="cancelled", ended=utc_now())  # as Launcher.cancel records it, no SIGTERM sent
+  client, launcher = _server(tmp_path, cluster)
+  try:
+    t_end = time.time() + 20
+    while lid in launcher.futures:
+      assert time.time() < t_end, "the cancelled launch's run was not stopped"
+      time.sleep(0.1)
+    (run,) = db.runs()
+    assert run["status"] == "interrupted" and db.launch(lid)["status"] == "cancelled"
   finally:
     launcher.stop()
 

@@ -57,10 +57,16 @@ class Launcher:
     self.thread = threading.Thread(target=self._loop, name="launcher", daemon=True)
 
   def start(self) -> "Launcher":
-    """Reconciles each launch that was running when the server stopped (_reconcile), then
-    follows the queue in a thread."""
+    """Reconciles each launch that was running when the server stopped (_reconcile), follows each
+    cancelled one whose task the cluster still runs (its run started as it was cancelled: the
+    queue's ticks stop it), then follows the queue in a thread."""
     for launch in self.db.launches("running"):
       self._reconcile(launch)
+    live = self._cluster_keys("launch-")
+    for launch in self.db.launches("cancelled"):
+      if f"launch-{launch['id']}" in live:
+        from distributed import Future  # noqa: PLC0415
+        self.futures[launch["id"]] = Future(f"launch-{launch['id']}", self.client)
     self.thread.start()
     return self
 
@@ -99,10 +105,16 @@ class Launcher:
                          error="finished while the server was down")
 
   def _cluster_knows(self, key: str) -> bool:
+    return key in self._cluster_keys(key)
+
+  def _cluster_keys(self, prefix: str) -> set[str]:
+    """The keys of the cluster's tasks that start with prefix (one call to its scheduler)."""
+    def keys(dask_scheduler) -> list[str]:
+      return [str(k) for k in dask_scheduler.tasks if str(k).startswith(prefix)]
     try:
-      return bool(self.client.run_on_scheduler(lambda dask_scheduler: key in dask_scheduler.tasks))
+      return set(self.client.run_on_scheduler(keys))
     except Exception:  # noqa: BLE001  (a cluster that cannot say knows nothing we can follow)
-      return False
+      return set()
 
   def stop(self) -> None:
     self.done.set()
