@@ -110,15 +110,10 @@ def ppo_run(tmp_path_factory):
 # Files that compile the most start first (pytest-xdist hands files out in collection order): the
 # shared PPO run is made early, and no long file starts last while the other worker idles.
 FIRST = ("test_training.py", "test_env.py", "test_training_sac.py", "test_brax_reference.py", "test_evaluator.py")
-# Files that compile the programs a FIRST file compiles start well after it, sorted among the others
-# as if named so: beside it on the other worker, both compiled them at once and neither found them in
-# the persistent cache (test_evaluator's Brax evaluator and group evaluator of helpers.PACK: ~18 s of
-# XLA twice).
-LATER = {"test_compile_ahead.py": "test_t"}
 
 
 def pytest_collection_modifyitems(items):
   def rank(item):
     name = item.path.name
-    return (FIRST.index(name), "") if name in FIRST else (len(FIRST), LATER.get(name, name))
+    return (FIRST.index(name), "") if name in FIRST else (len(FIRST), name)
   items.sort(key=rank)  # stable: each file's tests keep their order

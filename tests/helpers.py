@@ -35,6 +35,38 @@ def pack_plans(out) -> list:
   return [dataclasses.replace(p, preset=dataclasses.replace(p.preset, num_evals=2, num_eval_envs=4)) for p in plans]
 
 
+class Compilations:
+  """While open, in the main thread: the seconds of each XLA compilation and the number of programs
+  loaded from the persistent compilation cache instead (JAX's monitoring events)."""
+
+  def __enter__(self):
+    import threading  # noqa: PLC0415
+    import jax  # noqa: PLC0415
+    self.seconds, self.cache_hits, self._on = [], 0, True
+
+    def main() -> bool:
+      return threading.current_thread() is threading.main_thread()
+
+    def compiled(event: str, seconds: float, **_):
+      if self._on and event == "/jax/core/compile/backend_compile_duration" and main():
+        self.seconds.append(seconds)
+
+    def loaded(event: str, **_):
+      if self._on and event == "/jax/compilation_cache/cache_hits" and main():
+        self.cache_hits += 1
+    jax.monitoring.register_event_duration_secs_listener(compiled)
+    jax.monitoring.register_event_listener(loaded)
+    return self
+
+  def __exit__(self, *exc):
+    self._on = False
+
+  def large(self) -> int:
+    """Programs compiled (over 0.5 s) or loaded from the cache (only those that took over 1 s to
+    compile are stored there: not the eager operations around an evaluation)."""
+    return sum(s > 0.5 for s in self.seconds) + self.cache_hits
+
+
 HELD_OUT = "middle"  # the ppo_run fixture's one held-out staircase (conftest.py)
 TRAIN_TINY = ["--task", "asc-inc-cog", "--preset", "cpu", *TINY]  # the ppo_run fixture's run, less its length
 

@@ -1,92 +1,42 @@
-"""The in-training evaluations' programs compiled ahead, in threads beside the training step's
-(train.core.ahead, `train.run --compile-ahead`): the first evaluation or probe after it compiles
-nothing large and reports what it reports without it. (The runs of tests/conftest.py's ppo_run and
-tests/test_group.py's program train with it on.)"""
-
-import threading
+"""The in-training probes' programs compiled ahead, in threads beside the training step's
+(train.core.ahead, `train.run --compile-ahead`): the first probe after it compiles nothing large
+and reports what it reports without it. (Brax's evaluations: tests/test_evaluator.py, beside the
+same evaluations as they come. The runs of tests/conftest.py's ppo_run and tests/test_group.py's
+program train with it on.)"""
 
 import jax
 import pytest
 
-from helpers import pack_plans
+from helpers import Compilations, pack_plans
 from train import evaluation
 from train.core import ahead
 from train.core.build import build
 from train.core.group import build_group, group_tasks, init_group
-from train.core.group_evaluator import GroupEvaluator
 from train.core.group_loop import run_slice
 from train.core.probe import GroupProbe, Probe
-from train.core.session import evaluator_of
 
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
-  """(t, states, plans, single): helpers.PACK's program of two tiny SAC runs of two tasks, with
-  Brax's evaluator (4 episodes), and its fresh states; its first run as a single run (single).
-  tests/test_evaluator.py compiles the same evaluations."""
+  """(t, states, plans, single): helpers.PACK's program of two tiny SAC runs of two tasks and its
+  fresh states; its first run as a single run (single)."""
   plans = pack_plans(tmp_path_factory.mktemp("ahead"))
   t = build_group(plans)
   return t, init_group(t, plans, group_tasks(t, plans)), plans, build(plans[0])
-
-
-class Compiles:
-  """While open, in the main thread: the seconds of each XLA compilation and the number of programs
-  loaded from the persistent compilation cache instead (JAX's monitoring events)."""
-
-  def __enter__(self):
-    self.seconds, self.cache_hits, self._on = [], 0, True
-
-    def compiled(event: str, seconds: float, **_):
-      if self._on and event == "/jax/core/compile/backend_compile_duration" and _main():
-        self.seconds.append(seconds)
-
-    def loaded(event: str, **_):
-      if self._on and event == "/jax/compilation_cache/cache_hits" and _main():
-        self.cache_hits += 1
-    jax.monitoring.register_event_duration_secs_listener(compiled)
-    jax.monitoring.register_event_listener(loaded)
-    return self
-
-  def __exit__(self, *exc):
-    self._on = False
-
-  def large(self) -> int:
-    """Programs compiled (over 0.5 s) or loaded from the cache (only those that took over 1 s to
-    compile are stored there: not the eager operations around an evaluation)."""
-    return sum(s > 0.5 for s in self.seconds) + self.cache_hits
-
-
-def _main() -> bool:
-  return threading.current_thread() is threading.main_thread()
 
 
 def _first_use_compiles_nothing_large_and_reports_the_same(make, use, example):
   """use(make()) twice: once as it comes, once after compile_ahead(example) (a fresh object each
   time, so the first compiles its programs itself or loads them from the persistent cache): the
   same report, and the second's first use neither compiles nor loads a large program."""
-  with Compiles() as cold:
+  with Compilations() as cold:
     want = use(make())
   computation = make()
   computation.compile_ahead(example)
-  with Compiles() as warm:
+  with Compilations() as warm:
     got = use(computation)
   assert cold.large() >= 1 and warm.large() == 0, (cold.seconds, cold.cache_hits, warm.seconds, warm.cache_hits)
   return want, got
-
-
-def test_brax_s_evaluator_and_a_programs_evaluation_compiled_ahead(tiny):
-  t, states, plans, single = tiny
-  one = run_slice(states, 0)
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: evaluator_of(single), lambda e: e(one), one)
-  figures = [k for k in want if k.startswith("eval/episode_")]
-  assert len(figures) > 10 and all(got[k] == want[k] for k in figures)
-
-  def evaluate(group):
-    group.at(states, 0)
-    return group.result(1)
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(
-      lambda: GroupEvaluator(t, [p.seed for p in plans], [p.cfg for p in plans]), evaluate, states)
-  assert all(got[k] == want[k] for k in figures)
 
 
 def test_the_probe_and_a_programs_probe_compiled_ahead(tiny):
