@@ -105,7 +105,9 @@ class Simulator:
     qpos = qpos.at[3:7].set(yaw_quat(jnp.asarray(yaw, jnp.float32)))
     if joint_angles is not None:
       qpos = qpos.at[self.layout.joint_qpos].set(joint_angles)
-      d = d.replace(ctrl=joint_angles)
+      # on the device like make_data's arrays (a caller's jnp.zeros is not placed on one: a jitted
+      # step given this data and then its own output compiled twice, the placement in its key)
+      d = d.replace(ctrl=d.ctrl.at[:].set(joint_angles))
     return d.replace(qpos=qpos)
 
   def substep(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array,
