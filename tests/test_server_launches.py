@@ -126,28 +126,55 @@ def test_stop_cancel_and_a_server_restart_that_resumes_the_run(tmp_path, cluster
     launcher.stop()
 
 
-def test_a_restarted_server_stops_the_run_of_a_launch_cancelled_as_the_server_stopped(tmp_path, cluster, monkeypatch):
-  """A launch cancelled while its run started (its process not yet known to the cancel) and the
-  server stopped before a tick could stop the run: the restarted server follows the launch and
-  stops its run, rather than leave it holding the cluster's slot (here 30 s)."""
-  monkeypatch.setenv("FAKE_SLOW_SEED", "0")  # 1 s per 100 steps
-  client, launcher = _server(tmp_path, cluster)
+def _slow_run_running(tmp_path, client) -> tuple[int, ExperimentDB]:
+  """(launch id, database) of a 30 s launch (3,000 steps at 1 s per 100) once its run is running."""
   lid = client.post("/api/launches", json={"task": "asc-inc-cog", "steps": 3000, "seed": 0}).json()["id"]
   db = ExperimentDB(str(tmp_path / "runs" / "experiments.sqlite"))
   t_end = time.time() + 60
   while not [r for r in db.runs() if r["status"] == "running"]:
     assert time.time() < t_end
     time.sleep(0.1)
-  launcher.stop()
-  db.set_launch(lid, status="cancelled", ended=utc_now())  # as Launcher.cancel records it, no SIGTERM sent
+  return lid, db
+
+
+def _stopped_soon(db: ExperimentDB, lid: int, timeout_s: float = 15) -> None:
+  t_end = time.time() + timeout_s
+  while db.runs()[0]["status"] == "running":
+    assert time.time() < t_end, "the cancelled launch's run still runs"
+    time.sleep(0.1)
+  assert db.runs()[0]["status"] == "interrupted" and db.launch(lid)["status"] == "cancelled"
+
+
+def test_a_launch_cancelled_before_its_process_is_known_has_its_run_stopped_once_it_is(tmp_path, cluster, monkeypatch):
+  """The cancel's look for the run's process finds none (as when the run is just starting, or
+  between its training and its evaluation): the launcher looks again at its next ticks and stops it,
+  rather than let it run on (here 30 s) in a slot Dask believes free."""
+  from train.server import launcher as launcher_module
+  monkeypatch.setenv("FAKE_SLOW_SEED", "0")
   client, launcher = _server(tmp_path, cluster)
   try:
-    t_end = time.time() + 20
-    while lid in launcher.futures:
-      assert time.time() < t_end, "the cancelled launch's run was not stopped"
-      time.sleep(0.1)
-    (run,) = db.runs()
-    assert run["status"] == "interrupted" and db.launch(lid)["status"] == "cancelled"
+    lid, db = _slow_run_running(tmp_path, client)
+    real, missed = launcher_module.stop_run_in, []
+    monkeypatch.setattr(launcher_module, "stop_run_in",
+                        lambda *a: real(*a) if missed else missed.append(1) or False)  # the first look misses
+    assert client.delete(f"/api/launches/{lid}").json()["detail"].endswith("cancelled")
+    _stopped_soon(db, lid)
+    assert missed == [1]
+  finally:
+    launcher.stop()
+
+
+def test_a_restarted_server_stops_the_run_of_a_launch_cancelled_as_the_server_stopped(tmp_path, cluster, monkeypatch):
+  """Cancelled (recorded so) and the server gone before it stopped the run: the restarted server
+  stops the process its pid file names."""
+  monkeypatch.setenv("FAKE_SLOW_SEED", "0")
+  client, launcher = _server(tmp_path, cluster)
+  lid, db = _slow_run_running(tmp_path, client)
+  launcher.stop()
+  db.set_launch(lid, status="cancelled", ended=utc_now())  # as Launcher.cancel records it, before its SIGTERM
+  client, launcher = _server(tmp_path, cluster)
+  try:
+    _stopped_soon(db, lid)
   finally:
     launcher.stop()
 

@@ -11,6 +11,7 @@ import signal
 import socket
 import sys
 import threading
+import time
 import traceback
 
 from train.db import FINISHED, ExperimentDB, utc_now
@@ -57,16 +58,15 @@ class Launcher:
     self.thread = threading.Thread(target=self._loop, name="launcher", daemon=True)
 
   def start(self) -> "Launcher":
-    """Reconciles each launch that was running when the server stopped (_reconcile), follows each
-    cancelled one whose task the cluster still runs (its run started as it was cancelled: the
-    queue's ticks stop it), then follows the queue in a thread."""
+    """Reconciles each launch that was running when the server stopped (_reconcile), stops the
+    process still working on a cancelled launch's run (cancelled as the server stopped, before it
+    could stop the run), then follows the queue in a thread."""
     for launch in self.db.launches("running"):
       self._reconcile(launch)
-    live = self._cluster_keys("launch-")
     for launch in self.db.launches("cancelled"):
-      if f"launch-{launch['id']}" in live:
-        from distributed import Future  # noqa: PLC0415
-        self.futures[launch["id"]] = Future(f"launch-{launch['id']}", self.client)
+      process = read_pid_file(launch["out_dir"]) if launch["out_dir"] else None
+      if process and process["host"] == socket.gethostname() and _alive(process["pid"]):
+        os.kill(process["pid"], signal.SIGTERM)
     self.thread.start()
     return self
 
@@ -105,16 +105,10 @@ class Launcher:
                          error="finished while the server was down")
 
   def _cluster_knows(self, key: str) -> bool:
-    return key in self._cluster_keys(key)
-
-  def _cluster_keys(self, prefix: str) -> set[str]:
-    """The keys of the cluster's tasks that start with prefix (one call to its scheduler)."""
-    def keys(dask_scheduler) -> list[str]:
-      return [str(k) for k in dask_scheduler.tasks if str(k).startswith(prefix)]
     try:
-      return set(self.client.run_on_scheduler(keys))
+      return bool(self.client.run_on_scheduler(lambda dask_scheduler: key in dask_scheduler.tasks))
     except Exception:  # noqa: BLE001  (a cluster that cannot say knows nothing we can follow)
-      return set()
+      return False
 
   def stop(self) -> None:
     self.done.set()
@@ -228,9 +222,12 @@ class Launcher:
       task = self.futures.get(launch_id)
       if isinstance(task, threading.Thread):
         task.runner.cancel.set()  # a study: its queued runs are cancelled
+      elif isinstance(task, ProcessWatch):
+        task.cancel()  # SIGTERM to its process
       elif task is not None:
-        task.cancel()  # still waiting for a slot
-        stop_run_in(self.db, launch["out_dir"])
+        task.cancel()  # still waiting for a slot; or running: Dask forgets it, its thread goes on
+        if not stop_run_in(self.db, launch["out_dir"]):
+          self.futures[launch_id] = CancelWatch(self.db, launch["out_dir"])  # its run may be starting
       return f"launch {launch_id} cancelled"
 
 
@@ -268,6 +265,24 @@ class ProcessWatch:
     log = self.out + ".log"
     tail = open(log).read()[-2000:] if os.path.exists(log) else ""
     return {"rc": rc, "log_tail": tail or f"its run ended {status}"}
+
+
+class CancelWatch:
+  """A cancelled launch whose run no process was found for yet: its task may be starting it (or
+  between its training and its evaluation). Each tick (done()) looks again and stops the process it
+  finds; done once it has, or after patience_s."""
+
+  def __init__(self, db: ExperimentDB, out: str | None, patience_s: float = 120.0):
+    self.db, self.out, self.until = db, out, time.monotonic() + patience_s
+
+  def done(self) -> bool:
+    return stop_run_in(self.db, self.out) or time.monotonic() > self.until
+
+  def cancel(self) -> None:
+    pass  # cancelled already: done() stops its run
+
+  def result(self) -> dict:
+    return {"rc": None, "log_tail": "cancelled"}
 
 
 def stop_run_in(db: ExperimentDB, out_dir: str | None) -> bool:
