@@ -19,8 +19,8 @@ def run_id(out: str) -> str:
   with open(os.path.join(out, "run.json")) as f:
     return json.load(f)["run_id"]
 
-# the SAC program of two tasks (direction, sampler and reward kind all differ) that test_task_pack,
-# test_evaluator and test_compile_ahead share, so that its evaluation programs compile once
+# the SAC program of two tasks (direction, sampler and reward kind all differ) of test_task_pack and
+# test_evaluator, and the single run (its first) of test_compile_ahead
 PACK = (("asc-inc-cog", 0), ("des-uni-ang", 1))  # (task, seed) of each run
 
 

@@ -5,24 +5,25 @@ same evaluations as they come. The runs of tests/conftest.py's ppo_run and tests
 program train with it on.)"""
 
 import jax
+import jax.numpy as jnp
 import pytest
 
 from helpers import Compilations, pack_plans
 from train import evaluation
 from train.core import ahead
 from train.core.build import build
-from train.core.group import build_group, group_tasks, init_group
 from train.core.group_loop import run_slice
 from train.core.probe import GroupProbe, Probe
+
+SEEDS = [0, 3]
 
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
-  """(t, states, plans, single): helpers.PACK's program of two tiny SAC runs of two tasks and its
-  fresh states; its first run as a single run (single)."""
-  plans = pack_plans(tmp_path_factory.mktemp("ahead"))
-  t = build_group(plans)
-  return t, init_group(t, plans, group_tasks(t, plans)), plans, build(plans[0])
+  """(t, states): helpers.PACK's first run (tiny SAC) and two runs' fresh states of its task, seeds
+  SEEDS (a `train.run --seeds` program)."""
+  t = build(pack_plans(tmp_path_factory.mktemp("ahead"))[0])
+  return t, jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in SEEDS]))
 
 
 def _first_use_compiles_nothing_large_and_reports_the_same(make, use, example):
@@ -40,20 +41,19 @@ def _first_use_compiles_nothing_large_and_reports_the_same(make, use, example):
 
 
 def test_the_probe_and_a_programs_probe_compiled_ahead(tiny):
-  t, states, plans, single = tiny
+  t, states = tiny
   one = run_slice(states, 0)
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: Probe(single, trials=4), lambda p: p(one), one)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: Probe(t, trials=4), lambda p: p(one), one)
   assert want == got and 0.0 <= want["probe/progress_mean"] <= 1.0
 
   def probe(group):
     group.at(states, 0)
     return group.result(1)
-  configs = [p.cfg for p in plans]
-  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, 4, configs), probe, states)
+  want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, trials=4), probe, states)
   assert want == got
   with pytest.MonkeyPatch.context() as mp:  # the runs' trials vmapped in one program, as on a GPU
     mp.setattr(evaluation, "vmapped_trials", lambda: True)
-    want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, 4, configs), probe, states)
+    want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: GroupProbe(t, trials=4), probe, states)
   assert want == got
 
 

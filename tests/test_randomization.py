@@ -159,8 +159,9 @@ def test_a_push_slides_twice_as_far_on_half_the_friction(robust_core):
   stop = jnp.full((4, core.action_size), 0.0).at[:, 0].set(-1.0)  # v = 0, joints held
   s = step(s, stop)
   es = s.pipeline_state
+  pert = es.robust.perturbation  # no more pushes
   s = s.replace(pipeline_state=es.replace(robust=es.robust.replace(
-      perturbation=es.robust.perturbation.replace(push_probability=jnp.zeros(4)))))
+      perturbation=pert.replace(push_probability=pert.push_probability.at[:].set(0.0)))))
   for _ in range(3):
     s = step(s, stop)
   slide = np.linalg.norm(np.asarray(s.pipeline_state.data.qpos[:, :2]) - xy0, axis=1)
