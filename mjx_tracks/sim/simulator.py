@@ -105,8 +105,8 @@ class Simulator:
     qpos = qpos.at[3:7].set(yaw_quat(jnp.asarray(yaw, jnp.float32)))
     if joint_angles is not None:
       qpos = qpos.at[self.layout.joint_qpos].set(joint_angles)
-      # on the device like make_data's arrays (a caller's jnp.zeros is not placed on one: a jitted
-      # step given this data and then its own output compiled twice, the placement in its key)
+      # committed to the device like make_data's arrays (a caller's jnp.zeros is not: a jitted step
+      # given this data, then its own output, compiled twice; committedness is in jit's key)
       d = d.replace(ctrl=d.ctrl.at[:].set(joint_angles))
     return d.replace(qpos=qpos)
 

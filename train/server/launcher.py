@@ -64,9 +64,7 @@ class Launcher:
     for launch in self.db.launches("running"):
       self._reconcile(launch)
     for launch in self.db.launches("cancelled"):
-      process = read_pid_file(launch["out_dir"]) if launch["out_dir"] else None
-      if process and process["host"] == socket.gethostname() and _alive(process["pid"]):
-        os.kill(process["pid"], signal.SIGTERM)
+      stop_named_process(launch["out_dir"])
     self.thread.start()
     return self
 
@@ -285,13 +283,20 @@ class CancelWatch:
     return {"rc": None, "log_tail": "cancelled"}
 
 
-def stop_run_in(db: ExperimentDB, out_dir: str | None) -> bool:
-  """SIGTERM to the process working on the run in `out_dir` (this host only): the phase the
-  launch's worker names (training or evaluation), else the running training the database knows;
-  True if sent."""
+def stop_named_process(out_dir: str | None) -> bool:
+  """SIGTERM to the live process of this host that the run's pid file names (the phase the launch's
+  worker runs: training or evaluation); True if sent."""
   process = read_pid_file(out_dir) if out_dir else None
   if process and process["host"] == socket.gethostname() and _alive(process["pid"]):
     os.kill(process["pid"], signal.SIGTERM)
+    return True
+  return False
+
+
+def stop_run_in(db: ExperimentDB, out_dir: str | None) -> bool:
+  """SIGTERM to the process working on the run in `out_dir` (this host only): the one its pid file
+  names, else the running training the database knows; True if sent."""
+  if stop_named_process(out_dir):
     return True
   run = run_in(db, out_dir)
   if run and run["status"] == "running" and run["host"] == socket.gethostname() and run["pid"]:
