@@ -128,13 +128,9 @@ class Launcher:
         self.futures.pop(launch["id"], None)
         self.db.set_launch(launch["id"], status="failed", ended=utc_now(),
                            error=f"could not start: {type(e).__name__}: {str(e)[:300]}")
-    for lid, future in list(self.futures.items()):
+    for lid, future in list(self.futures.items()):  # a cancelled run that had no process yet: CancelWatch
       if (not future.is_alive()) if isinstance(future, threading.Thread) else future.done():
         self._settle(lid, future)
-      else:
-        launch = self.db.launch(lid)
-        if launch["status"] == "cancelled":  # its run may have started since the cancel
-          stop_run_in(self.db, launch["out_dir"])
 
   def _submit(self, launch: dict) -> None:
     spec, kind = launch["spec"], launch["kind"]
