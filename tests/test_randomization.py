@@ -156,7 +156,8 @@ def test_a_push_slides_twice_as_far_on_half_the_friction(robust_core):
   p = _batch(core, friction=[[1, 1], [0.5, 0.5]] * 2, push_velocity=[1.0] * 4, push_probability=[1.0] * 4)
   s = reset(jnp.stack([jax.random.PRNGKey(4)] * 4), p)
   xy0 = np.asarray(s.pipeline_state.data.qpos[:, :2])
-  stop = jnp.full((4, core.action_size), 0.0).at[:, 0].set(-1.0)  # v = 0, joints held
+  # v = 0, joints held; zeros, not jnp.full(.., 0.0): a weakly typed action is another program
+  stop = jnp.zeros((4, core.action_size)).at[:, 0].set(-1.0)
   s = step(s, stop)
   es = s.pipeline_state
   pert = es.robust.perturbation  # no more pushes

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import sys
 import time
 
@@ -46,12 +47,24 @@ class DriveSetup:
 
   def goal(self):
     """Goal point (m): past the top edge going up, before the first riser going down."""
-    return (sc.ascent_goal if self.direction == "up" else sc.descent_goal)(self.stairs)
+    return stairs_goal(self.stairs, self.direction == "up")
 
   def initial_data(self):
-    spawn = sc.ascent_spawn if self.direction == "up" else sc.descent_spawn
-    pos, yaw = spawn(self.stairs)
-    return self.sim.init_data(pos, yaw, jnp.zeros(self.sim.layout.n_joints))
+    return start_data(self.sim, self.stairs, self.direction == "up")
+
+
+def stairs_goal(stairs: sc.Staircase, up) -> jax.Array:
+  """The goal point (m) going up where up, else going down; up: a bool, or a bool array (the
+  direction as data)."""
+  return jnp.where(up, sc.ascent_goal(stairs), sc.descent_goal(stairs))
+
+
+def start_data(sim: Simulator, stairs: sc.Staircase, up):
+  """The robot at the ascent spawn where up, else at the descent spawn, its joints at 0; up as in
+  stairs_goal."""
+  (pos_up, yaw_up), (pos_down, yaw_down) = sc.ascent_spawn(stairs), sc.descent_spawn(stairs)
+  return sim.init_data(jnp.where(up, pos_up, pos_down), jnp.where(up, yaw_up, yaw_down),
+                       jnp.zeros(sim.layout.n_joints))
 
 
 def parse_stairs(text: str) -> sc.Staircase:
@@ -73,33 +86,52 @@ CONTROLLERS = ("scripted", "full")  # StairScript; full belt speed with the join
 
 def scripted_rollouts(setup: DriveSetup, n_steps: int, controller: str = "scripted") -> np.ndarray:
   """One rollout of n_steps control periods per staircase of setup.stairs (fields with a batch axis
-  B); returns qpos (B, n_steps + 1, nq). The robot stops at the goal."""
+  B); returns qpos (B, n_steps + 1, nq). The robot stops at the goal. The direction is data: up and
+  down run one program, compiled once per simulator, substeps, length and controller."""
   if controller not in CONTROLLERS:
     raise ValueError(f"controller must be one of {CONTROLLERS}, got {controller!r}")
-  sim, robot = setup.sim, setup.sim.robot
-  script = StairScript(setup.direction)
-  ahead = 1.0 if setup.direction == "up" else -1.0  # +x is up the stairs
+  program = _rollouts_program(_Identity(setup.sim), setup.substeps, n_steps, controller)
+  return np.asarray(program(setup.stairs, jnp.asarray(setup.direction == "up")))
 
-  def one(stairs: sc.Staircase) -> jax.Array:
-    s = dataclasses.replace(setup, stairs=stairs)
-    m, goal_x = s.model(), s.goal()[0]
+
+class _Identity:
+  """A cache key that is its object's identity (a Simulator holds arrays: it has no hash)."""
+
+  def __init__(self, obj):
+    self.obj = obj
+
+  def __hash__(self):
+    return id(self.obj)
+
+  def __eq__(self, other):
+    return isinstance(other, _Identity) and other.obj is self.obj
+
+
+@functools.lru_cache(maxsize=8)
+def _rollouts_program(sim_key: _Identity, substeps: int, n_steps: int, controller: str):
+  """jit(vmap over staircases) of one drive: (stairs with a batch axis, up: bool) -> qpos."""
+  sim = sim_key.obj
+  robot, script = sim.robot, StairScript("up")  # its direction unused: command_either takes it as data
+
+  def one(stairs: sc.Staircase, up: jax.Array) -> jax.Array:
+    m, goal_x, ahead = sim.with_boxes(*sc.step_boxes(stairs)), stairs_goal(stairs, up)[0], jnp.where(up, 1.0, -1.0)
 
     def control_step(d, _):
       if controller == "full":
         speed, targets = robot.max_speed, jnp.zeros(sim.layout.n_joints)
       else:
-        speed, targets = script.command(robot, -chassis_rpy(d.qpos)[1])  # from the nose-up angle
-      speed = jnp.where(ahead * (d.qpos[0] - goal_x) >= 0.0, 0.0, speed)  # stop at the goal
+        speed, targets = script.command_either(robot, -chassis_rpy(d.qpos)[1], up)  # from the nose-up angle
+      speed = jnp.where(ahead * (d.qpos[0] - goal_x) >= 0.0, 0.0, speed)  # stop at the goal (+x is up the stairs)
       belts = command_belt_speeds(speed, 0.0, robot.track_separation, robot.steering_efficiency,
                                   robot.max_speed)
-      d = sim.advance(m, d, belts, targets, s.substeps)
+      d = sim.advance(m, d, belts, targets, substeps)
       return d, d.qpos
 
-    d0 = s.initial_data()
+    d0 = start_data(sim, stairs, up)
     _, qpos = jax.lax.scan(control_step, d0, None, length=n_steps)
     return jnp.concatenate([d0.qpos[None], qpos], axis=0)
 
-  return np.asarray(jax.jit(jax.vmap(one))(setup.stairs))
+  return jax.jit(jax.vmap(one, in_axes=(0, None)))
 
 
 def scripted_rollout(setup: DriveSetup, n_steps: int) -> np.ndarray:

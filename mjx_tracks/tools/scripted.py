@@ -24,14 +24,25 @@ class StairScript:
 
   def command(self, robot: RobotSpec, nose_up: jnp.ndarray) -> tuple[float, jnp.ndarray]:
     """(belt speed, joint targets) from the chassis' nose-up angle."""
+    return self._up(robot, nose_up) if self.direction == "up" else self._down(robot, nose_up)
+
+  def command_either(self, robot: RobotSpec, nose_up: jnp.ndarray, up: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """The up script's command where up (a bool array), else the down script's: the direction as
+    data, so that one compiled program drives both ways."""
+    (speed_up, targets_up), (speed_down, targets_down) = self._up(robot, nose_up), self._down(robot, nose_up)
+    return jnp.where(up, speed_up, speed_down), jnp.where(up, targets_up, targets_down)
+
+  def _up(self, robot: RobotSpec, nose_up: jnp.ndarray) -> tuple[float, jnp.ndarray]:
     lim = robot.flipper_limit
-    if self.direction == "up":
-      on_stairs = nose_up >= self.climb_pitch
-      # approach: front flippers raised to hook the first edge; climbing: flippers in line,
-      # rear pair pushing down a little; arm payload forward to keep the COG ahead.
-      return self.speed, joint_targets(robot, {
-          "front": jnp.where(on_stairs, 0.0, lim), "rear": jnp.where(on_stairs, -0.3, 0.0),
-          "arm_1": 0.8 * jnp.clip(3.0 * nose_up, 0.0, 1.0)})
+    on_stairs = nose_up >= self.climb_pitch
+    # approach: front flippers raised to hook the first edge; climbing: flippers in line,
+    # rear pair pushing down a little; arm payload forward to keep the COG ahead.
+    return self.speed, joint_targets(robot, {
+        "front": jnp.where(on_stairs, 0.0, lim), "rear": jnp.where(on_stairs, -0.3, 0.0),
+        "arm_1": 0.8 * jnp.clip(3.0 * nose_up, 0.0, 1.0)})
+
+  def _down(self, robot: RobotSpec, nose_up: jnp.ndarray) -> tuple[float, jnp.ndarray]:
+    lim = robot.flipper_limit
     on_stairs = nose_up <= -self.climb_pitch
     # descent: front flippers reach down to the next tread, then all flippers in line; arm
     # payload backward.
