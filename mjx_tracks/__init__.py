@@ -28,7 +28,7 @@ def load(task: str, overrides=()):
 def _register_gymnasium() -> None:
   import gymnasium  # noqa: PLC0415
 
-  from mjx_tracks.envs.config import available_tasks  # noqa: PLC0415
+  from mjx_tracks.envs.task_files import available_tasks  # noqa: PLC0415  (no JAX: a light import)
   for task in available_tasks():
     env_id = f"mjx_tracks/{task}-v0"
     if env_id not in gymnasium.registry:

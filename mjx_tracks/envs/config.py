@@ -22,26 +22,12 @@ import yaml
 
 from mjx_tracks.bounds import bound, violation
 from mjx_tracks.envs.randomization import RandomizationConfig
+from mjx_tracks.envs.task_files import DEFAULTS, available_tasks, config_dir  # noqa: F401  (re-exported)
 from mjx_tracks.limits import MAX_NAME_CHARS, MAX_OVERRIDE_CHARS, MAX_YAML_CHARS, MAX_YAML_NODES
 from mjx_tracks.sim.physics import PhysicsConfig
 from scenes.navigation import (MAX_FLOOR_OBSTACLES, NAV_CLEARANCE_LIMITS, NAV_FLOOR_PASSAGE_LIMITS, NAV_GAP_LIMITS,
                                NAV_LENGTH_LIMITS)
 from scenes.terrain_kinds import TERRAIN_PARAMS
-
-DEFAULTS = "defaults"  # configs/defaults.yaml: every key's default; not a task
-
-
-def config_dir(package: pathlib.Path | None = None) -> pathlib.Path:
-  """The task YAML files beside the mjx_tracks package that runs (`package`, default this one):
-  its package data configs/ once installed, else the source checkout's configs/ (the repository's
-  top level). Never another checkout's: an editable install of one tree maps the package data to
-  that tree, and a second tree on PYTHONPATH must still read its own YAML."""
-  package = pathlib.Path(__file__).resolve().parents[1] if package is None else package
-  for folder in (package / "configs", package.parent / "configs"):
-    if (folder / f"{DEFAULTS}.yaml").is_file():
-      return folder
-  raise FileNotFoundError(f"no {DEFAULTS}.yaml in {package / 'configs'} (installed) or {package.parent / 'configs'} "
-                          "(a source checkout): the install is incomplete")
 
 
 class ConfigError(ValueError):
@@ -625,12 +611,6 @@ def _parsed(name: str, text: str) -> dict:
   if not isinstance(loaded, dict):
     raise ConfigError(f"{name}.yaml: top level must be a mapping")
   return loaded
-
-
-def available_tasks() -> list[str]:
-  """Task names: every configs/*.yaml except defaults.yaml."""
-  return sorted(p.name[:-5] for p in config_dir().iterdir()
-                if p.name.endswith(".yaml") and p.name[:-5] != DEFAULTS)
 
 
 FROM_DEFAULTS = "from configs/defaults.yaml"  # an added key whose old runs never read it
