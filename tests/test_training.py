@@ -386,7 +386,7 @@ def test_a_run_made_from_the_dashboard_form_trains_for_real(ppo_run, tmp_path):
       page.goto(f"{base}/new")
       page.wait_for_selector("#f-episode--max_steps")
       tiny = [("#f-" + key.replace(".", "--"), value) for key, value in (s.split("=", 1) for s in TINY_SETTINGS)]
-      for field, value in (("#steps", "1024"), ("#eval_trials", "0"), *tiny):
+      for field, value in (("#steps", "512"), ("#eval_trials", "0"), *tiny):  # one update
         page.fill(field, value)
       page.click("#launch")
       page.wait_for_function("document.getElementById('result').textContent.startsWith('queued')")
@@ -396,7 +396,7 @@ def test_a_run_made_from_the_dashboard_form_trains_for_real(ppo_run, tmp_path):
       (launch,) = dbmod.ExperimentDB(settings.db).launches()
       assert launch["status"] == "done", launch["error"]
       (run,) = dbmod.ExperimentDB(settings.db).runs()
-      assert run["status"] == "done" and run["total_steps"] == 1024
+      assert run["status"] == "done" and run["total_steps"] == 512
       page.goto(f"{base}/runs/{run['run_id']}")
       page.wait_for_function("document.querySelector('.chart') && document.querySelector('.chart').data[0].x.length > 0")
       assert not dbmod.ExperimentDB(settings.db).evals(run["run_id"])  # 0 evaluation trials: no suite
