@@ -12,7 +12,6 @@ import dataclasses
 import functools
 import itertools
 import math
-import pathlib
 import re
 import reprlib
 import typing
