@@ -47,7 +47,7 @@ class _StopAfter:
 
 
 def _args(out, db, *more):
-  """The training tests' tiny task (helpers.TINY: 5 physics steps per control step, no beams)."""
+  """The training tests' tiny task (helpers.TINY: 2 physics steps per control step, no beams)."""
   return ["--library", "sb3", "--task", "asc-inc-cog", "--algo", "sac", "--preset", "cpu", "--steps", "250",
           "--hp", "training_metrics_steps=100", *TINY, "--out", str(out), "--db", str(db), *more]
 
