@@ -13,6 +13,10 @@
 # training rows), read from each program's database by train.bench.runs, and prints them. Figures
 # are comparable within one call (one machine); alone: PPO 6,230, SAC ~37 (2026-11-28).
 # Measured: results/speed/group/mps-pair-priority-H200-2026-11-28.json (docs/benchmarks.md).
+# STAGGER=1 starts the PPO program once the SAC program has compiled its training step ("compiled
+# in"), not beside it; COLD=1 gives each variant an empty compilation cache of its own. Each
+# program's ready_s: from the variant's start to its training step's compiled event (its training's
+# start; the database's times are whole seconds).
 # Usage: EACH=270 bash scripts/gpu/mps_pair.sh 85:0 85:1
 set -uo pipefail
 export PYTHONUNBUFFERED=1 MJX_TRACKS_CACHE=/tmp/mps-pair-cache XLA_PYTHON_CLIENT_MEM_FRACTION=0.45
@@ -40,6 +44,8 @@ read -ra ppo <<< "$(grep '^ppo ' <<< "$packs" | cut -d' ' -f2-)"
 for variant in "$@"; do
   share=${variant%%:*} priority=${variant#*:}
   dir=$work/$share-$priority && rm -rf "$dir" && mkdir -p "$dir/pipe" "$dir/log"
+  [ "${COLD:-0}" = 1 ] && export MJX_TRACKS_CACHE=$dir/cache
+  date +%s > "$dir/t0"
   export CUDA_MPS_PIPE_DIRECTORY=$dir/pipe CUDA_MPS_LOG_DIRECTORY=$dir/log
   nvidia-cuda-mps-control -d || { echo "error: no MPS daemon for $variant" >&2; exit 1; }
   for prog in sac ppo; do
@@ -47,25 +53,43 @@ for variant in "$@"; do
     else args=("${ppo[@]}") sm=$share prio=$priority; fi
     CUDA_MPS_ACTIVE_THREAD_PERCENTAGE=$sm CUDA_MPS_CLIENT_PRIORITY=$prio timeout "${EACH:-270}" \
       python3 -m train.run "${args[@]}" --out "$dir/$prog" --db "$dir/$prog.sqlite" > "$dir/$prog.log" 2>&1 &
+    if [ $prog = sac ] && [ "${STAGGER:-0}" = 1 ]; then
+      until grep -q "compiled in" "$dir/sac.log" 2>/dev/null || ! kill -0 $! 2>/dev/null; do sleep 1; done
+    fi
   done
   wait
   echo quit | nvidia-cuda-mps-control
 done
 python3 - "$work" "$@" <<'PY'
-import json, os, sys
+import datetime, json, os, sys
 from train.bench.runs import compile_seconds, training_rates
+from train.db import ExperimentDB
+
+
+def ready_s(path, t0):
+  """Seconds from t0 (epoch) to the program's first compiled event (None: never compiled)."""
+  times = [e["time"] for r in ExperimentDB(path).runs() for e in ExperimentDB(path).events(r["run_id"])
+           if e["event"] == "compiled"]
+  return min(datetime.datetime.fromisoformat(t).timestamp() for t in times) - t0 if times else None
+
+
 work, variants, found = sys.argv[1], sys.argv[2:], {}
 for v in variants:
   for prog in ("sac", "ppo"):
     path = os.path.join(work, v.replace(":", "-"), f"{prog}.sqlite")
     made = os.path.isfile(path)  # not where the program failed before it started its records
+    t0 = float(open(os.path.join(work, v.replace(":", "-"), "t0")).read())
     found.setdefault(v, {})[prog] = {"compile_s": compile_seconds(path) if made else None,
+                                     "ready_s": ready_s(path, t0) if made else None,
                                      "reports": training_rates(path) if made else []}
 out = os.path.join(os.environ.get("OUT", "."), "mps-pair.json")
 device = os.popen("nvidia-smi --query-gpu=name,driver_version --format=csv,noheader").read().strip()
 json.dump({"device": device, "date": os.popen("date -u +%FT%TZ").read().strip(),
-           "each_s": int(os.environ.get("EACH", 270)), "command": " ".join(["bash scripts/gpu/mps_pair.sh", *variants]),
+           "each_s": int(os.environ.get("EACH", 270)), "stagger": os.environ.get("STAGGER", "0") == "1",
+           "cold": os.environ.get("COLD", "0") == "1",
+           "command": " ".join([f"STAGGER={os.environ.get('STAGGER', '0')} COLD={os.environ.get('COLD', '0')} "
+                                f"EACH={os.environ.get('EACH', 270)} bash scripts/gpu/mps_pair.sh", *variants]),
            "variants": found}, open(out, "w"), indent=1)
 for v, progs in found.items():
-  print(v, {p: (r["compile_s"], [x["steps_per_s"] for x in r["reports"]]) for p, r in progs.items()})
+  print(v, {p: (r["compile_s"], r["ready_s"], [x["steps_per_s"] for x in r["reports"]]) for p, r in progs.items()})
 PY
