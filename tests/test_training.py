@@ -1,6 +1,7 @@
 """Training end to end on the CPU: a tiny PPO run, resume, export -> load -> act, evaluation
 report, experiment database, bad input (SAC: test_training_sac.py)."""
 
+import datetime
 import glob
 import json
 import multiprocessing
@@ -53,6 +54,8 @@ def test_the_database_holds_the_compile_time_and_training_rates_the_command_prin
   printed_rates = [float(x.replace(",", "")) for x in re.findall(r"^\[train\].*?([0-9,]+) steps/s", said, re.M)]
   compiled = runs.compile_seconds(database)
   assert compiled is not None and abs(compiled - float(printed_compile.replace(",", ""))) <= 0.501
+  started = [e["time"] for e in dbmod.ExperimentDB(database).events(run_id(out)) if e["event"] == "started"]
+  assert runs.compiled_at(database) >= datetime.datetime.fromisoformat(started[0]).timestamp()  # training from then
   rates = runs.training_rates(database)
   assert len(rates) == len(printed_rates) >= 2 and [r["step"] for r in rates] == sorted(r["step"] for r in rates)
   assert [round(r["steps_per_s"]) for r in rates] == printed_rates

@@ -61,26 +61,16 @@ for variant in "$@"; do
   echo quit | nvidia-cuda-mps-control
 done
 python3 - "$work" "$@" <<'PY'
-import datetime, json, os, sys
-from train.bench.runs import compile_seconds, training_rates
-from train.db import ExperimentDB
-
-
-def ready_s(path, t0):
-  """Seconds from t0 (epoch) to the program's first compiled event (None: never compiled)."""
-  times = [e["time"] for r in ExperimentDB(path).runs() for e in ExperimentDB(path).events(r["run_id"])
-           if e["event"] == "compiled"]
-  return min(datetime.datetime.fromisoformat(t).timestamp() for t in times) - t0 if times else None
-
-
+import json, os, sys
+from train.bench.runs import compile_seconds, compiled_at, training_rates
 work, variants, found = sys.argv[1], sys.argv[2:], {}
 for v in variants:
   for prog in ("sac", "ppo"):
     path = os.path.join(work, v.replace(":", "-"), f"{prog}.sqlite")
     made = os.path.isfile(path)  # not where the program failed before it started its records
-    t0 = float(open(os.path.join(work, v.replace(":", "-"), "t0")).read())
+    t0, ready = float(open(os.path.join(work, v.replace(":", "-"), "t0")).read()), compiled_at(path) if made else None
     found.setdefault(v, {})[prog] = {"compile_s": compile_seconds(path) if made else None,
-                                     "ready_s": ready_s(path, t0) if made else None,
+                                     "ready_s": None if ready is None else ready - t0,
                                      "reports": training_rates(path) if made else []}
 out = os.path.join(os.environ.get("OUT", "."), "mps-pair.json")
 device = os.popen("nvidia-smi --query-gpu=name,driver_version --format=csv,noheader").read().strip()

@@ -4,6 +4,7 @@ by the GPU drivers (scripts/gpu/compile_flags.py, scripts/gpu/mps_pair.sh)."""
 
 from __future__ import annotations
 
+import datetime
 import os
 import statistics
 
@@ -38,9 +39,20 @@ def steady_rate(rates: list[dict]) -> float | None:
   return statistics.median(later) if later else None
 
 
+def _compiled_events(db_path: str) -> list[dict]:
+  db = _db(db_path)
+  return [e for run in db.runs() for e in db.events(run["run_id"]) if e["event"] == "compiled"]
+
+
 def compile_seconds(db_path: str) -> float | None:
   """The longest a training step of the database's runs took to compile (s; the runs of one program
   share one), or None where none was recorded."""
-  db = _db(db_path)
-  seconds = [float(e["detail"]) for run in db.runs() for e in db.events(run["run_id"]) if e["event"] == "compiled"]
+  seconds = [float(e["detail"]) for e in _compiled_events(db_path)]
   return max(seconds) if seconds else None
+
+
+def compiled_at(db_path: str) -> float | None:
+  """When the database's runs first had their training step compiled (epoch s, whole seconds as the
+  database records them): when their training started; None where none was recorded."""
+  times = [datetime.datetime.fromisoformat(e["time"]).timestamp() for e in _compiled_events(db_path)]
+  return min(times) if times else None
