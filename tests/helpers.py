@@ -36,6 +36,18 @@ def pack_plans(out) -> list:
   return [dataclasses.replace(p, preset=dataclasses.replace(p.preset, num_evals=2, num_eval_envs=4)) for p in plans]
 
 
+# the `train.run --seeds` program of test_evaluator and test_compile_ahead: the PACK's first run (its
+# task) with these seeds, so that the two files' evaluation and probe programs are the same
+SEEDS = [0, 3]
+
+
+def seeds_states(t):
+  """The fresh learner states of run t's task with each of SEEDS (a batch axis: the program's runs)."""
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+  return jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in SEEDS]))
+
+
 class Compilations:
   """While open, in the main thread: the seconds of each XLA compilation and the number of programs
   loaded from the persistent compilation cache instead (JAX's monitoring events)."""

@@ -5,25 +5,22 @@ same evaluations as they come. The runs of tests/conftest.py's ppo_run and tests
 program train with it on.)"""
 
 import jax
-import jax.numpy as jnp
 import pytest
 
-from helpers import Compilations, pack_plans
+from helpers import Compilations, pack_plans, seeds_states
 from train import evaluation
 from train.core import ahead
 from train.core.build import build
 from train.core.group_loop import run_slice
 from train.core.probe import GroupProbe, Probe
 
-SEEDS = [0, 3]
-
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
   """(t, states): helpers.PACK's first run (tiny SAC) and two runs' fresh states of its task, seeds
-  SEEDS (a `train.run --seeds` program)."""
+  helpers.SEEDS (a `train.run --seeds` program)."""
   t = build(pack_plans(tmp_path_factory.mktemp("ahead"))[0])
-  return t, jax.jit(jax.vmap(t.learner.init))(jnp.stack([jax.random.PRNGKey(s) for s in SEEDS]))
+  return t, seeds_states(t)
 
 
 def _first_use_compiles_nothing_large_and_reports_the_same(make, use, example):

@@ -8,12 +8,10 @@ train without it, to keep the end-to-end tests short.)"""
 import dataclasses
 import types
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from helpers import TINY, Compilations, pack_plans
+from helpers import SEEDS, TINY, Compilations, pack_plans, seeds_states
 from train.core.build import brax_evaluator, build
 from train.core.group import build_group, group_evaluations, group_tasks, init_group
 from train.core.group_evaluator import GroupEvaluator
@@ -22,9 +20,6 @@ from train.core.mesh import to_host
 from train.core.plan import plan_run
 from train.core.session import evaluator_of
 from train.run import parser
-
-
-SEEDS = [0, 3]  # the `--seeds` program's: one task, two seeds
 
 
 @pytest.fixture(scope="module")
@@ -37,8 +32,7 @@ def programs(tmp_path_factory):
   plans = pack_plans(tmp_path_factory.mktemp("pack"))
   own = [build(p) for p in plans]
   t = build_group(plans)
-  keys = jnp.stack([jax.random.PRNGKey(s) for s in SEEDS])
-  seeds = (GroupEvaluator(own[0], SEEDS), jax.jit(jax.vmap(own[0].learner.init))(keys),
+  seeds = (GroupEvaluator(own[0], SEEDS), seeds_states(own[0]),
            _keeping(brax_evaluator(own[0], SEEDS[1]), own[0]))
   tasks = (GroupEvaluator(t, [p.seed for p in plans], [p.cfg for p in plans]),
            init_group(t, plans, group_tasks(t, plans)), _keeping(brax_evaluator(own[1], plans[1].seed), own[1]))
