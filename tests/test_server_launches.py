@@ -289,7 +289,8 @@ def test_a_restart_reconciles_each_running_launch_with_what_it_finds(tmp_path, c
          for name, out in outs.items()}
   for lid in ids.values():
     db.set_launch(lid, status="running")
-  evaluator = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+  # a stand-in train.evaluate of that folder: its command line names it, as the real one's does
+  evaluator = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", str(outs["evaluating"])])
   _record_process(outs["evaluating"], evaluator.pid, "evaluate")
   launcher = Launcher(db.path, str(runs), cluster, ("cpu",), COMMANDS, poll_s=3600).start()  # no tick
   try:
@@ -304,3 +305,28 @@ def test_a_restart_reconciles_each_running_launch_with_what_it_finds(tmp_path, c
   finally:
     evaluator.kill()
     launcher.stop()
+
+
+def test_a_stale_pid_file_naming_another_process_stops_nothing(tmp_path):
+  """A worker that died leaves its run's pid file; the pid may belong to another process since. Only
+  a live process of this host whose command line names the run's folder is the run's: it alone is
+  stopped (and followed after a restart)."""
+  import signal
+  import socket
+  import subprocess
+  import sys
+  from train.server.launcher import named_process, stop_named_process
+  from train.study.worker import pid_file
+  out = str(tmp_path / "run")
+  sleep = "import time; time.sleep(60)"
+  other = subprocess.Popen([sys.executable, "-c", sleep])
+  ours = subprocess.Popen([sys.executable, "-c", sleep, "--out", out])
+  try:
+    for proc, named in ((other, False), (ours, True)):
+      pathlib.Path(pid_file(out)).write_text(f'{{"pid": {proc.pid}, "host": "{socket.gethostname()}", "phase": "train"}}')
+      assert (named_process(out) is not None) == named and stop_named_process(out) == named
+    assert ours.wait(10) == -signal.SIGTERM
+    assert other.poll() is None  # not signalled
+  finally:
+    other.kill()
+    ours.kill()

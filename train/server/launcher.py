@@ -73,12 +73,12 @@ class Launcher:
     the server) or its process still runs on this host; done (or queued for its evaluation) if its
     run finished meanwhile; else queued again, to resume where a checkpoint exists."""
     lid, out = launch["id"], launch["out_dir"] or ""
-    process = read_pid_file(out) if out else None
+    process = named_process(out)
     if self._cluster_knows(f"launch-{lid}"):
       from distributed import Future  # noqa: PLC0415
       self.futures[lid] = Future(f"launch-{lid}", self.client)
       return
-    if process and process["host"] == socket.gethostname() and _alive(process["pid"]):
+    if process:
       self.futures[lid] = ProcessWatch(process["pid"], process["phase"], out, self.db)
       return
     run = run_in(self.db, out)
@@ -279,14 +279,28 @@ class CancelWatch:
     return {"rc": None, "log_tail": "cancelled"}
 
 
-def stop_named_process(out_dir: str | None) -> bool:
-  """SIGTERM to the live process of this host that the run's pid file names (the phase the launch's
-  worker runs: training or evaluation); True if sent."""
+def named_process(out_dir: str | None) -> dict | None:
+  """The run's pid file ({"pid", "host", "phase"}: the phase the launch's worker runs, training or
+  evaluation) where it names a live process of this host that works on out_dir (the folder is in its
+  command line: a pid file left by a worker that died may name a pid the system has given another
+  process since); else None."""
+  import psutil  # noqa: PLC0415  (a dependency of distributed)
   process = read_pid_file(out_dir) if out_dir else None
-  if process and process["host"] == socket.gethostname() and _alive(process["pid"]):
+  if not process or process["host"] != socket.gethostname() or not _alive(process["pid"]):
+    return None
+  try:
+    argv = psutil.Process(process["pid"]).cmdline()
+  except psutil.Error:
+    return None
+  return process if any(a == out_dir or os.path.abspath(a) == os.path.abspath(out_dir) for a in argv) else None
+
+
+def stop_named_process(out_dir: str | None) -> bool:
+  """SIGTERM to the process named_process(out_dir) finds; True if sent."""
+  process = named_process(out_dir)
+  if process:
     os.kill(process["pid"], signal.SIGTERM)
-    return True
-  return False
+  return process is not None
 
 
 def stop_run_in(db: ExperimentDB, out_dir: str | None) -> bool:
