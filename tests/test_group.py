@@ -32,6 +32,13 @@ class Rows:
     return row
 
 
+class NoSaves(Checkpointer):
+  """The loop's checkpoints, not written (these programs' states are not training states)."""
+
+  def save(self, state, step, wait=True):
+    self.last_t = time.monotonic()
+
+
 def test_each_run_stops_on_its_own_probe_and_is_finished_with_the_state_it_had_then():
   """Two runs of 100-step updates; run 0's probe reads 0.98 from its second probe, run 1's never:
   run 0 is finished at step 400 with the state it had then (its slot computed on, and discarded),
@@ -46,7 +53,7 @@ def test_each_run_stops_on_its_own_probe_and_is_finished_with_the_state_it_had_t
   for i in (0, 1):
     reporters.append(Rows())
     probe = lambda s, i=i: {"probe/success_rate": next(probe_values[i])}  # noqa: E731
-    members.append(Member(Checkpointer(None, {}, None, lambda step: None, every_s=1e9), reporters[i],
+    members.append(Member(NoSaves(None, {}, None, lambda step: None, every_s=1e9), reporters[i],
                           Schedule(100, EarlyStop("success", 0.97, 1), ((probe, 200),)),
                           lambda r, i=i: finished.append(i) or (r.reason, r.step, int(r.state))))
   results = GroupLoop(update, 100, members, types.SimpleNamespace(requested=None)).run(np.zeros(2, np.int64), 0, 1_000)
@@ -62,9 +69,9 @@ def test_a_programs_checkpoint_rounds_take_at_most_a_tenth_of_its_wall_time():
   saved = []
 
   class SlowSaves(Checkpointer):
-    def save(self, state, step):
+    def save(self, state, step, wait=True):
       time.sleep(0.05)
-      saved.append((type(state), int(state), step))
+      saved.append((type(state), int(state), step, wait))
       self.last_t = time.monotonic()
 
   members = [Member(SlowSaves(None, {}, None, lambda step: None, every_s=0.0), Rows(), Schedule(100), lambda r: r.step)
@@ -72,15 +79,16 @@ def test_a_programs_checkpoint_rounds_take_at_most_a_tenth_of_its_wall_time():
   results = GroupLoop(lambda s: (s + 1, {}), 100, members, types.SimpleNamespace(requested=None)).run(
       jnp.zeros(2, jnp.int32), 0, 300)
   assert results == [300, 300]
-  assert [(value, step) for _, value, step in saved] == [(0, 0), (0, 0)]  # one round, at the start
-  assert all(issubclass(kind, np.generic) for kind, _, _ in saved)  # host slices, not device ones
+  # one round, at the start, written in the background; then the runs' final checkpoints, together
+  assert [(value, step, wait) for _, value, step, wait in saved] == [(0, 0, False)] * 2 + [(3, 300, False)] * 2
+  assert all(issubclass(kind, np.generic) for kind, *_ in saved)  # host slices, not device ones
   assert all(0.9 <= m.checkpointer.gap_s < 10 for m in members)  # 9 x a round of ~0.1 s
 
 
 def test_an_updates_metrics_go_to_the_host_once_for_every_runs_report_and_each_run_reads_its_own(monkeypatch):
   from train.core import group_loop
   fetched = []
-  monkeypatch.setattr(group_loop, "to_host", lambda tree: fetched.append(1) or jax.device_get(tree))
+  monkeypatch.setattr(group_loop, "to_host", lambda tree: fetched.append(isinstance(tree, dict)) or jax.device_get(tree))
 
   class Kept(Rows):
     def __call__(self, step, metrics):
@@ -92,17 +100,17 @@ def test_an_updates_metrics_go_to_the_host_once_for_every_runs_report_and_each_r
                     "training/loss": jnp.asarray([0.5, 1.5, 2.5])}
 
   reporters = [Kept() for _ in range(3)]
-  members = [Member(Checkpointer(None, {}, None, lambda step: None, every_s=1e9), r, Schedule(200), lambda r: r.step)
+  members = [Member(NoSaves(None, {}, None, lambda step: None, every_s=1e9), r, Schedule(200), lambda r: r.step)
              for r in reporters]
   GroupLoop(update, 100, members, types.SimpleNamespace(requested=None)).run(jnp.zeros(3), 0, 400)
-  assert len(fetched) == 4  # one transfer per update, not one per run and metric
+  assert fetched.count(True) == 4  # one transfer of metrics per update, not one per run and metric
   for i, r in enumerate(reporters):
     assert [m["episode/sum_reward"] for m in r.rows] == pytest.approx([(i + 1) / 3] * 2)  # per episode, its own
     assert [m["training/loss"] for m in r.rows] == pytest.approx([0.5 + i] * 2)
 
 
 def test_a_stop_request_ends_every_run_of_the_program():
-  members = [Member(Checkpointer(None, {}, None, lambda step: None, every_s=1e9), Rows(), Schedule(100),
+  members = [Member(NoSaves(None, {}, None, lambda step: None, every_s=1e9), Rows(), Schedule(100),
                     lambda r: (r.reason, r.step)) for _ in (0, 1)]
   results = GroupLoop(lambda s: (s + 1, {}), 100, members, types.SimpleNamespace(requested=15)).run(np.zeros(2), 0, 500)
   assert results == [("interrupted", 0)] * 2

@@ -97,17 +97,24 @@ class RunCheckpoints:
     self.mgr = ocp.CheckpointManager(self.dir, options=ocp.CheckpointManagerOptions(
         max_to_keep=keep, create=False, multiprocessing_options=_solo()))
 
-  def save(self, step: int, state, policy, meta: dict[str, Any]) -> bool:
+  def save(self, step: int, state, policy, meta: dict[str, Any], wait: bool = True) -> bool:
     """Saves a step (host state tree, (normalizer, policy), JSON meta); a step already on disk is
-    kept as it is (returns False)."""
+    kept as it is (returns False). wait=False: orbax writes it in the background (the arrays must
+    not change until then) and the step is on disk once `wait()` returns; a save waits for the
+    one before it first."""
     if step in self.mgr.all_steps():
       return False
     arrays, layout = flatten_state(state)
     self.mgr.save(step, args=ocp.args.Composite(
         state=ocp.args.StandardSave(arrays), params=ocp.args.StandardSave(_plain(policy)),
         meta=ocp.args.JsonSave(dict(meta, step=step, layout=layout))), force=True)
-    self.mgr.wait_until_finished()
+    if wait:
+      self.wait()
     return True
+
+  def wait(self) -> None:
+    """Returns once the save in flight (if any) is complete on disk; raises what it failed with."""
+    self.mgr.wait_until_finished()
 
   def latest_step(self) -> int | None:
     return self.mgr.latest_step()

@@ -25,6 +25,7 @@ from train.core.build import Training, build, has_evaluations, learner_on
 from train.core.early_stop import criterion_name
 from train.core.group_evaluator import GroupEvaluator, evaluations_shared
 from train.core.group_loop import GroupLoop, Member
+from train.core.loop import settle_all
 from train.core.plan import RunError, RunPlan
 from train.core.probe import GroupProbe
 from train.core.progress import Reporter
@@ -208,6 +209,7 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
                      after_update).run(states, 0, plans[0].total_steps)
   finally:
+    settle_all(m.checkpointer for m, _ in parts)
     ahead.settle(shared)
     for _, reporter in parts:
       reporter.close()

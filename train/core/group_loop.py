@@ -136,9 +136,15 @@ class GroupLoop:
     tracks = [Track(self.spu, m.reporter, m.schedule, clock, step, index=i) for i, m in enumerate(self.members)]
     done: dict[int, Any] = {}
 
-    def end(i: int, reason: str) -> None:
-      tracks[i].flush(step)
-      done[i] = self.members[i].finish(LoopResult(run_slice(states, i), step, reason))
+    def end(ending: list[int], reason: str) -> None:
+      """Finishes the runs that end at this step: their checkpoints written at once, in the
+      background, from one transfer of the states, then each run's finish (which waits for its own)."""
+      for i in ending:
+        tracks[i].flush(step)
+      if len(ending) > 1:
+        self._save_all(states, step, ending, wait=False)
+      for i in ending:
+        done[i] = self.members[i].finish(LoopResult(run_slice(states, i), step, reason))
 
     for m in self.members:
       m.checkpointer.last_t = time.monotonic()
@@ -146,8 +152,7 @@ class GroupLoop:
       active = [i for i in range(len(self.members)) if i not in done]
       stop, ckpt = _agree(self.stop.requested is not None, self.members[active[0]].checkpointer.due())
       if stop:
-        for i in active:
-          end(i, "interrupted")
+        end(active, "interrupted")
         break
       if ckpt:
         self._checkpoint_round(states, step, active, clock)
@@ -155,21 +160,23 @@ class GroupLoop:
       metrics = OnHost(metrics)
       step += self.spu
       self.after_update(states, step)
-      for i in active:
-        if tracks[i].after_update(lambda i=i: run_slice(states, i), step, metrics, total) == "early_stop":
-          end(i, "early_stop")
-    for i in range(len(self.members)):
-      if i not in done:
-        end(i, "done")
+      end([i for i in active if tracks[i].after_update(lambda i=i: run_slice(states, i), step, metrics, total)
+           == "early_stop"], "early_stop")
+    end([i for i in range(len(self.members)) if i not in done], "done")
     return [done[i] for i in range(len(self.members))]
 
+  def _save_all(self, states, step: int, runs: list[int], wait: bool) -> None:
+    """Checkpoints of the given runs from one device-to-host transfer of the program's states."""
+    host = to_host(states)
+    for i in runs:
+      self.members[i].checkpointer.save(run_slice(host, i), step, wait)
+
   def _checkpoint_round(self, states, step: int, active: list[int], clock: Clock) -> None:
-    """Every active run's timed checkpoint, from one device-to-host transfer of the program's
-    states; the next round waits round_gap(this round's seconds), or --checkpoint-every if longer."""
+    """Every active run's timed checkpoint, written in the background while training goes on (the
+    round waits for the last round's writes, the transfer and the start of each write); the next
+    round waits round_gap(this round's seconds), or --checkpoint-every if longer."""
     t0 = time.monotonic()
-    host = clock.paused(to_host, states)
-    for i in active:
-      clock.paused(self.members[i].checkpointer.save, run_slice(host, i), step)
+    clock.paused(self._save_all, states, step, active, False)
     gap = round_gap(time.monotonic() - t0)
     for i in active:
       self.members[i].checkpointer.hold_off(gap)

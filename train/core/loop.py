@@ -4,6 +4,7 @@ evaluations, early stop and stop requests (Ctrl-C / SIGTERM) between updates."""
 from __future__ import annotations
 
 import dataclasses
+import sys
 import time
 from typing import Any, Callable
 
@@ -28,6 +29,7 @@ class Checkpointer:
   last_t: float = dataclasses.field(default_factory=time.monotonic)
   last_step: int | None = None
   gap_s: float = 0.0  # s: the next timed checkpoint no sooner than this either (hold_off)
+  unsettled: int | None = None  # the step whose save is in flight (recorded once it is on disk)
 
   def due(self) -> bool:
     return time.monotonic() - self.last_t >= max(self.every_s, self.gap_s)
@@ -36,21 +38,42 @@ class Checkpointer:
     """The next timed checkpoint no sooner than gap_s after the last (nor than every_s)."""
     self.gap_s = gap_s
 
-  def save(self, state, step: int) -> None:
-    """Checkpoints the state (unless this step is on disk already)."""
+  def save(self, state, step: int, wait: bool = True) -> None:
+    """Checkpoints the state (unless this step is saved already). wait=False (the timed rounds):
+    the state is fetched to the host and orbax writes it in the background while training goes on;
+    the next save, or settle(), waits for it. The database records a checkpoint once it is on
+    disk, so a recorded step can always be resumed from."""
     self.last_t = time.monotonic()
-    if step == self.last_step:
-      return
-    host = to_host(state)  # every process takes part in the gather; process 0 writes
-    if jax.process_index() != 0:
+    if step != self.last_step:
+      self.settle()
+      host = to_host(state)  # every process takes part in the gather; process 0 writes
+      if jax.process_index() == 0:
+        glob = jax.tree_util.tree_map(lambda x: x[0], host.env_state.info["global"])
+        if self.ckpts.save(step, host, self.learner.policy_params(host),
+                           {**self.meta, "global": global_stats_to_json(glob)}, wait=False):
+          self.unsettled = step
       self.last_step = step
+    if wait:
+      self.settle()
+
+  def settle(self) -> None:
+    """Waits for the save in flight, if any, then records its step."""
+    if self.unsettled is None:
       return
-    glob = jax.tree_util.tree_map(lambda x: x[0], host.env_state.info["global"])
-    written = self.ckpts.save(step, host, self.learner.policy_params(host),
-                              {**self.meta, "global": global_stats_to_json(glob)})
-    self.last_step = step
-    if written:
-      self.record(step)
+    step, self.unsettled = self.unsettled, None
+    self.ckpts.wait()
+    self.record(step)
+
+
+def settle_all(checkpointers) -> None:
+  """Waits for every checkpoint still being written (after a failure: what was in flight stays
+  resumable and recorded); one that fails is reported in a line, not raised over the failure
+  being handled."""
+  for c in checkpointers:
+    try:
+      c.settle()
+    except Exception as e:  # noqa: BLE001  (orbax / tensorstore raise many types)
+      print(f"warning: a checkpoint being written failed ({type(e).__name__}: {e})", file=sys.stderr)
 
 
 @dataclasses.dataclass
@@ -178,7 +201,7 @@ class Loop:
         reason = "interrupted"
         break
       if ckpt:
-        clock.paused(self.checkpointer.save, state, step)
+        clock.paused(self.checkpointer.save, state, step, False)
       state, metrics = self.update(state)
       step += self.spu
       reason = track.after_update(lambda: state, step, metrics, total)

@@ -14,7 +14,7 @@ from train.core import ahead
 from train.core.build import Training, build, compile_update, init_state, make_evaluator
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
 from train.evaluation import milestone_folder
-from train.core.loop import Checkpointer, Loop, LoopResult, Schedule
+from train.core.loop import Checkpointer, Loop, LoopResult, Schedule, settle_all
 from train.core.mesh import from_host, to_host
 from train.core.plan import RunError, RunPlan
 from train.core.probe import Probe
@@ -140,6 +140,7 @@ def train(prepared: Prepared, db, stop, options: SessionOptions = SessionOptions
   try:
     return finish_run(t, loop.run(state, step, t.plan.total_steps), checkpointer, reporter)
   finally:
+    settle_all([checkpointer])
     ahead.settle(f for f, _ in loop.schedule.evaluations)
     reporter.close()
 
