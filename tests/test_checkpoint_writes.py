@@ -1,16 +1,20 @@
-"""Timed checkpoints written in the background (train.core.loop.Checkpointer, train.core.checkpoints):
-training goes on while orbax writes; the database records a step only once it is complete on disk;
-the runs of a program that end together start their writes at once; a write that fails after the
-training failed is reported, not raised over that failure."""
+"""How a run's checkpoints are written (train.core.checkpoints, train.core.loop.Checkpointer): the
+state's leaves as one array of bytes, read back exactly (every dtype, empty and 0-d leaves), as are
+checkpoints written before as one array per leaf; a layout that does not fit is refused; timed
+checkpoints written in the background while training goes on, the database recording a step only
+once it is complete on disk; the runs of a program that end together start their writes at once; a
+write that fails after the training failed is reported, not raised over that failure."""
 
 import collections
 import types
 
 import jax
 import numpy as np
+import orbax.checkpoint as ocp
+import pytest
 
 from mjx_tracks.envs.wrappers import global_stats_from_json
-from train.core.checkpoints import RunCheckpoints, saved_steps
+from train.core.checkpoints import PACKED, CheckpointError, RunCheckpoints, flatten_state, saved_steps, unflatten_state
 from train.core.group_loop import GroupLoop, Member
 from train.core.loop import Checkpointer, Schedule, settle_all
 
@@ -70,3 +74,34 @@ def test_a_write_that_fails_while_a_failure_is_handled_is_reported_in_one_line(c
   settle_all([c, Checkpointer(None, {}, None, recorded.append, every_s=60.0)])
   err = capsys.readouterr().err
   assert recorded == [] and err.count("\n") == 1 and "checkpoint being written failed (OSError: disk full)" in err
+
+
+MIXED = {"f": np.arange(6, dtype=np.float32).reshape(2, 3) / 7, "i": np.array([-3, 5], np.int32),
+         "b": np.array([True, False, True]), "u": np.array([[1, 2**32 - 1]], np.uint32), "scalar": np.float32(0.25),
+         "empty": np.zeros((0, 4), np.float32), "d": np.array([1e-300], np.float64), "h": np.array([1.5], np.float16)}
+
+
+def test_the_states_leaves_are_one_array_of_bytes_that_reads_back_exactly_and_a_layout_that_does_not_fit_is_refused():
+  arrays, layout = flatten_state(MIXED)
+  assert list(arrays) == [PACKED] and arrays[PACKED].dtype == np.uint8
+  assert arrays[PACKED].size == sum(np.asarray(x).nbytes for x in MIXED.values())
+  back = unflatten_state(arrays, layout, jax.tree_util.tree_map(np.asarray, MIXED))
+  for name, want in MIXED.items():
+    got = back[name]
+    assert got.dtype == np.asarray(want).dtype and got.shape == np.shape(want) and np.array_equal(got, want), name
+  with pytest.raises(CheckpointError, match="holds 4 bytes, its layout"):
+    unflatten_state({PACKED: np.zeros(4, np.uint8)}, layout, MIXED)
+
+
+def test_a_checkpoint_written_as_one_array_per_leaf_reads_back(tmp_path):
+  """Checkpoints before 2026-11-29: the state item holds leaf_NNNNN arrays (none for an empty leaf)."""
+  _, layout = flatten_state(MIXED)
+  leaves = jax.tree_util.tree_leaves(MIXED)
+  old = {f"leaf_{i:05d}": np.asarray(x) for i, x in enumerate(leaves) if np.size(x)}
+  ckpts = RunCheckpoints(str(tmp_path))
+  ckpts.mgr.save(7, args=ocp.args.Composite(state=ocp.args.StandardSave(old), params=ocp.args.StandardSave({"w": np.ones(2)}),
+                                            meta=ocp.args.JsonSave({"step": 7, "layout": layout})))
+  ckpts.wait()
+  state, meta = ckpts.restore_state(7, jax.tree_util.tree_map(np.asarray, MIXED))
+  assert meta["step"] == 7 and all(np.array_equal(state[k], v) for k, v in MIXED.items())
+  assert sorted(ckpts.arrays(7)) == sorted(old)

@@ -14,6 +14,7 @@ from typing import Callable, Optional
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from brax.envs.base import State, Wrapper
 from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
 from flax import struct
@@ -139,8 +140,9 @@ def batched_env(core: TrackedRobotEnv, axis_name: Optional[str] = None):
 
 
 def global_stats_to_json(g: GlobalStats) -> dict:
-  """GlobalStats -> plain lists (for checkpoint metadata)."""
-  plain = lambda obj: {f.name: jnp.asarray(getattr(obj, f.name)).tolist() for f in dataclasses.fields(obj)}
+  """GlobalStats -> plain lists (for checkpoint metadata; numpy, so that a host state's figures do
+  not go to the device and back, two transfers per field and run of a checkpoint round)."""
+  plain = lambda obj: {f.name: np.asarray(getattr(obj, f.name)).tolist() for f in dataclasses.fields(obj)}
   return {"curriculum": plain(g.curriculum), "normalizer": plain(g.normalizer)}
 
 

@@ -3,7 +3,9 @@
 RUN/checkpoints/<step>/ holds three items:
 - `state`: every leaf of the learner's state (parameters, optimizer moments, observation
   normalizer, the batch of environments with the curriculum and penalty normalizer in it, RNG
-  keys, SAC's whole replay buffer), flattened to `leaf_NNNNN` arrays in tree order;
+  keys, SAC's whole replay buffer), in tree order, their bytes one after the other in one array
+  `state_bytes` (orbax's cost is per array: a SAC state's 240 leaves took ~3x as long to write;
+  checkpoints written before 2026-11-29 hold one `leaf_NNNNN` array per leaf, and read back too);
 - `params`: the (normalizer, policy) parameters, what evaluation and export need;
 - `meta` (JSON): step, algorithm, network spec, the leaves' tree paths and shapes, curriculum.
 Orbax writes each step into a temporary directory and renames it when complete, so a run killed
@@ -62,18 +64,38 @@ def trained_to(run_dir: str, total: int | None) -> bool:
   return bool(steps) and total is not None and steps[-1] >= total
 
 
+PACKED = "state_bytes"  # the state item's one array: every leaf's bytes in tree order
+
+
 def flatten_state(state) -> tuple[dict[str, np.ndarray], list[dict]]:
-  """Host state -> ({leaf_NNNNN: array}, [{path, shape, dtype}]) in tree order."""
-  leaves = jax.tree_util.tree_flatten_with_path(state)[0]
-  arrays = {f"leaf_{i:05d}": np.asarray(x) for i, (_, x) in enumerate(leaves) if np.size(x)}  # orbax: no empties
-  layout = [{"path": jax.tree_util.keystr(p), "shape": list(np.shape(x)), "dtype": str(np.asarray(x).dtype)}
-            for p, x in leaves]
-  return arrays, layout
+  """Host state -> ({PACKED: every leaf's bytes, one after the other}, [{path, shape, dtype}]) in
+  tree order ({} for a state without any element: orbax writes no empty array)."""
+  leaves = [(p, np.asarray(x)) for p, x in jax.tree_util.tree_flatten_with_path(state)[0]]
+  layout = [{"path": jax.tree_util.keystr(p), "shape": list(x.shape), "dtype": str(x.dtype)} for p, x in leaves]
+  parts = [x.reshape(-1).view(np.uint8) for _, x in leaves if x.size]  # reshape: a contiguous copy where not
+  return ({PACKED: np.concatenate(parts)} if parts else {}), layout
+
+
+def leaf_arrays(arrays: dict, layout: list[dict]) -> dict[str, np.ndarray]:
+  """A checkpoint's state item -> {leaf_NNNNN: array} (the layout's leaves with any element; from
+  PACKED, or as checkpoints before 2026-11-29 hold them)."""
+  if PACKED not in arrays:
+    return {k: np.asarray(v) for k, v in arrays.items()}
+  data, out, at = np.asarray(arrays[PACKED], np.uint8), {}, 0
+  sizes = [int(np.prod(leaf["shape"], dtype=np.int64)) * np.dtype(leaf["dtype"]).itemsize for leaf in layout]
+  if sum(sizes) != data.size:
+    raise CheckpointError(f"the checkpoint's state holds {data.size:,} bytes, its layout {sum(sizes):,}")
+  for i, (leaf, size) in enumerate(zip(layout, sizes)):
+    if size:
+      out[f"leaf_{i:05d}"] = data[at:at + size].view(leaf["dtype"]).reshape(leaf["shape"])
+    at += size
+  return out
 
 
 def unflatten_state(arrays: dict, layout: list[dict], target):
   """The inverse of flatten_state onto `target`'s tree (e.g. from jax.eval_shape); a checkpoint of
   another shape of run raises CheckpointError naming the first leaf that differs."""
+  arrays = leaf_arrays(arrays, layout)
   leaves, treedef = jax.tree_util.tree_flatten_with_path(target)
   if len(leaves) != len(layout):
     raise CheckpointError(f"the checkpoint holds {len(layout)} arrays, this run's state {len(leaves)}")
@@ -130,8 +152,9 @@ class RunCheckpoints:
 
   def arrays(self, step: int) -> dict[str, np.ndarray]:
     """The raw `leaf_NNNNN` arrays of a step's state (e.g. to compare two runs)."""
-    out = self.mgr.restore(step, args=ocp.args.Composite(state=ocp.args.StandardRestore()))
-    return {k: np.asarray(v) for k, v in out["state"].items()}
+    out = self.mgr.restore(step, args=ocp.args.Composite(state=ocp.args.StandardRestore(),
+                                                          meta=ocp.args.JsonRestore()))
+    return leaf_arrays(jax.device_get(out["state"]), out["meta"]["layout"])
 
   def restore_state(self, step: int, target) -> tuple[Any, dict]:
     """(host state shaped like target, meta) of a step."""
