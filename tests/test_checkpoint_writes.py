@@ -3,7 +3,8 @@ state's leaves as one array of bytes, read back exactly (every dtype, empty and 
 checkpoints written before as one array per leaf; a layout that does not fit is refused; timed
 checkpoints written in the background while training goes on, the database recording a step only
 once it is complete on disk; the runs of a program that end together start their writes at once; a
-write that fails after the training failed is reported, not raised over that failure."""
+write that fails after the training failed is reported, not raised over that failure; a run's
+slice of the program's states on the host stays there."""
 
 import collections
 import types
@@ -15,7 +16,7 @@ import pytest
 
 from mjx_tracks.envs.wrappers import global_stats_from_json
 from train.core.checkpoints import PACKED, CheckpointError, RunCheckpoints, flatten_state, saved_steps, unflatten_state
-from train.core.group_loop import GroupLoop, Member
+from train.core.group_loop import GroupLoop, Member, run_slice
 from train.core.loop import Checkpointer, Schedule, settle_all
 
 State = collections.namedtuple("State", "env_state params")
@@ -105,3 +106,16 @@ def test_a_checkpoint_written_as_one_array_per_leaf_reads_back(tmp_path):
   state, meta = ckpts.restore_state(7, jax.tree_util.tree_map(np.asarray, MIXED))
   assert meta["step"] == 7 and all(np.array_equal(state[k], v) for k, v in MIXED.items())
   assert sorted(ckpts.arrays(7)) == sorted(old)
+
+
+def test_a_run_of_a_host_tree_is_sliced_on_the_host_though_brax_keeps_its_count_on_the_device():
+  """to_host's trees hold Brax's UInt64 normalizer count as jax arrays (its __post_init__ makes them
+  so): a run's slice of such a tree is numpy views of the host arrays, not the whole tree sent to
+  the device and each run's slice fetched back."""
+  from brax.training.types import UInt64
+  host = {"buffer": np.arange(3 * 1000, dtype=np.float32).reshape(3, 1000),
+          "count": UInt64(hi=np.zeros(3, np.uint32), lo=np.array([5, 6, 7], np.uint32))}
+  assert isinstance(host["count"].lo, jax.Array)  # what makes the tree not all numpy
+  one = run_slice(host, 1)
+  assert isinstance(one["buffer"], np.ndarray) and np.shares_memory(one["buffer"], host["buffer"])
+  assert int(one["count"].lo) == 6 and one["buffer"][0] == 1000.0

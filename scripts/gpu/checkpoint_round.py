@@ -1,9 +1,10 @@
 """Issue 30, what a timed checkpoint round of a program of many runs costs the training: every run's
 whole-state checkpoint (replay buffer included) from one transfer of the program's states, written
-the way the loop wrote it before 2026-11-29 (one orbax array per leaf of the state, the curriculum's
-figures through jax.numpy, each save waited for) and the way it writes it since
-(train.core.loop.Checkpointer.save(..., wait=False): the leaves' bytes as one array, written in
-the background). For each round: the seconds the training loop is held ("blocking") and the seconds
+the way the loop wrote it before 2026-11-29 (each run's slice of the host states taken on the device
+whole, as run_slice did while Brax's UInt64 count kept two leaves there; one orbax array per leaf of
+the state; the curriculum's figures through jax.numpy; each save waited for) and the way it writes
+it since (train.core.group_loop.run_slice: numpy views; train.core.loop.Checkpointer.save(...,
+wait=False): the leaves' bytes as one array, written in the background). For each round: the seconds the training loop is held ("blocking") and the seconds
 until every run's checkpoint is on disk ("on_disk"). In one process, alternating, twice each, after
 a warm-up round of each way; the runs' fresh states (train.core.group.init_group: the shapes the
 program checkpoints). Writes OUT/checkpoint-round.json with the device, command and date.
@@ -30,7 +31,7 @@ import orbax.checkpoint as ocp  # noqa: E402
 
 from train.core.checkpoints import RunCheckpoints, _plain  # noqa: E402
 from train.core.group import build_group, group_tasks, init_group  # noqa: E402
-from train.core.group_loop import run_slice  # noqa: E402
+from train.core.group_loop import _device_slice, run_slice  # noqa: E402
 from train.core.loop import Checkpointer  # noqa: E402
 from train.core.mesh import to_host  # noqa: E402
 from train.run import group_plans, parser  # noqa: E402
@@ -57,7 +58,7 @@ def round_seconds(t, states, folder: pathlib.Path, step: int, way: str, n: int) 
   host = to_host(states)
   if way == "old":
     for i in range(n):
-      old_save(RunCheckpoints(str(folder / f"run{i}")), t, run_slice(host, i), step)
+      old_save(RunCheckpoints(str(folder / f"run{i}")), t, to_host(_device_slice(host, i)), step)
     blocking = time.perf_counter() - t0
     return {"blocking": round(blocking, 2), "on_disk": round(blocking, 2)}
   savers = [Checkpointer(RunCheckpoints(str(folder / f"run{i}")), {"way": way}, t.learner, lambda s: None, 60.0)

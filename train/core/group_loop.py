@@ -38,9 +38,13 @@ def _device_slice(states, i):
 
 
 def run_slice(states, i: int):
-  """Run i's state of the stacked states (the program's leading axis): on the device one program
-  for the whole tree (not one dispatch per leaf), on the host numpy views."""
-  if all(isinstance(x, np.ndarray) for x in jax.tree_util.tree_leaves(states)):
+  """Run i's state of the stacked states (the program's leading axis): of the program's states on
+  the device, one program for the whole tree (not one dispatch per leaf); of a host tree (to_host's),
+  numpy views. A host tree may hold a few device arrays: Brax's UInt64 (the observation
+  normalizer's count) makes its parts jax arrays whenever it is built, to_host's result too; those
+  are sliced where they are. (Until 2026-11-29 such a tree went to the device whole, every run's
+  slice a copy of every run's state there and back: most of a checkpoint round's time.)"""
+  if any(isinstance(x, np.ndarray) for x in jax.tree_util.tree_leaves(states)):
     return jax.tree_util.tree_map(lambda x: x[i], states)
   return _device_slice(states, i)
 
