@@ -7,6 +7,7 @@ write that fails after the training failed is reported, not raised over that fai
 slice of the program's states on the host stays there."""
 
 import collections
+import time
 import types
 
 import jax
@@ -44,11 +45,20 @@ def test_a_timed_checkpoint_is_recorded_only_once_it_is_whole_on_disk_and_reads_
   assert recorded == [] and c.unsettled == 100  # in flight: not in the database yet
   c.save(_state(2.0), 200, wait=False)  # the next save waits for the one before, then records it
   assert recorded == [(100, [100])] and c.unsettled == 200
-  c.save(_state(2.0), 200)  # the same step again (a run's finish after a round): no second write, only the wait
-  assert recorded == [(100, [100]), (200, [100, 200])] and c.unsettled is None
-  state, meta = ckpts.restore_state(200, _state(0.0))
-  assert meta["step"] == 200 and meta["global"]["curriculum"]["head"] == 1
-  np.testing.assert_array_equal(state.params["w"], np.full((3, 4), 2.0, np.float32))
+  deadline = time.monotonic() + 60
+  while c.unsettled is not None and time.monotonic() < deadline:  # the loop asks after each update
+    c.poll()
+    time.sleep(0.01)
+  assert recorded == [(100, [100]), (200, [100, 200])]  # recorded once written, without a wait
+  recorded.clear()
+  c.save(_state(2.0), 200)  # the same step again (a run's finish after a round): no second write
+  assert recorded == [] and c.unsettled is None
+  c.save(_state(3.0), 300, wait=False)
+  c.save(_state(3.0), 300)  # a finish right after a round: waits for its write
+  assert recorded == [(300, [100, 200, 300])] and c.unsettled is None
+  state, meta = ckpts.restore_state(300, _state(0.0))
+  assert meta["step"] == 300 and meta["global"]["curriculum"]["head"] == 1
+  np.testing.assert_array_equal(state.params["w"], np.full((3, 4), 3.0, np.float32))
 
 
 def test_runs_ending_together_start_their_writes_before_any_run_is_finished():

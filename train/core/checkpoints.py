@@ -138,6 +138,11 @@ class RunCheckpoints:
     """Returns once the save in flight (if any) is complete on disk; raises what it failed with."""
     self.mgr.wait_until_finished()
 
+  def writing(self) -> bool:
+    """Whether a save is still being written (True where this orbax cannot tell)."""
+    in_progress = getattr(self.mgr, "is_saving_in_progress", None)
+    return True if in_progress is None else bool(in_progress())
+
   def latest_step(self) -> int | None:
     return self.mgr.latest_step()
 

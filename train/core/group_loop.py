@@ -162,6 +162,8 @@ class GroupLoop:
         self._checkpoint_round(states, step, active, clock)
       states, metrics = self.update(states)
       metrics = OnHost(metrics)
+      for i in active:  # each run's last timed checkpoint recorded once it is on disk
+        self.members[i].checkpointer.poll()
       step += self.spu
       self.after_update(states, step)
       end([i for i in active if tracks[i].after_update(lambda i=i: run_slice(states, i), step, metrics, total)

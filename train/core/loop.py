@@ -32,7 +32,13 @@ class Checkpointer:
   unsettled: int | None = None  # the step whose save is in flight (recorded once it is on disk)
 
   def due(self) -> bool:
+    self.poll()
     return time.monotonic() - self.last_t >= max(self.every_s, self.gap_s)
+
+  def poll(self) -> None:
+    """Records the save in flight if it is complete (without waiting for it)."""
+    if self.unsettled is not None and not self.ckpts.writing():
+      self.settle()
 
   def hold_off(self, gap_s: float) -> None:
     """The next timed checkpoint no sooner than gap_s after the last (nor than every_s)."""
@@ -42,7 +48,7 @@ class Checkpointer:
     """Checkpoints the state (unless this step is saved already). wait=False (the timed rounds):
     the state is fetched to the host and orbax writes it in the background while training goes on;
     the next save, or settle(), waits for it. The database records a checkpoint once it is on
-    disk, so a recorded step can always be resumed from."""
+    disk (poll(), after each update, or the wait), so a recorded step can always be resumed from."""
     self.last_t = time.monotonic()
     if step != self.last_step:
       self.settle()
