@@ -43,7 +43,7 @@ class DriveSetup:
     return max(1, round(self.control_period / self.sim.physics.timestep))
 
   def model(self):
-    return self.sim.with_boxes(*sc.step_boxes(self.stairs))
+    return stairs_model(self.sim, self.stairs)
 
   def goal(self):
     """Goal point (m): past the top edge going up, before the first riser going down."""
@@ -51,6 +51,11 @@ class DriveSetup:
 
   def initial_data(self):
     return start_data(self.sim, self.stairs, self.direction == "up")
+
+
+def stairs_model(sim: Simulator, stairs: sc.Staircase):
+  """The simulator's model with the staircase's step boxes."""
+  return sim.with_boxes(*sc.step_boxes(stairs))
 
 
 def stairs_goal(stairs: sc.Staircase, up) -> jax.Array:
@@ -114,7 +119,7 @@ def _rollouts_program(sim_key: _Identity, substeps: int, n_steps: int, controlle
   robot, script = sim.robot, StairScript("up")  # its direction unused: command_either takes it as data
 
   def one(stairs: sc.Staircase, up: jax.Array) -> jax.Array:
-    m, goal_x, ahead = sim.with_boxes(*sc.step_boxes(stairs)), stairs_goal(stairs, up)[0], jnp.where(up, 1.0, -1.0)
+    m, goal_x, ahead = stairs_model(sim, stairs), stairs_goal(stairs, up)[0], jnp.where(up, 1.0, -1.0)
 
     def control_step(d, _):
       if controller == "full":
