@@ -129,3 +129,18 @@ def test_a_run_of_a_host_tree_is_sliced_on_the_host_though_brax_keeps_its_count_
   one = run_slice(host, 1)
   assert isinstance(one["buffer"], np.ndarray) and np.shares_memory(one["buffer"], host["buffer"])
   assert int(one["count"].lo) == 6 and one["buffer"][0] == 1000.0
+
+
+def test_a_checkpoint_whose_bytes_disagree_with_its_layout_is_skipped_for_the_one_before(tmp_path):
+  """Damage, not another run's checkpoint: a resume reports it in one line and takes the older one."""
+  ckpts, said = RunCheckpoints(str(tmp_path)), []
+  for step, value in ((1, 1.0), (2, 2.0)):
+    ckpts.save(step, _state(value), ({"w": np.ones(2)},), {"algo": "x"})
+  arrays, layout = flatten_state(_state(3.0))
+  ckpts.mgr.save(3, args=ocp.args.Composite(state=ocp.args.StandardSave({PACKED: arrays[PACKED][:-4]}),
+                                            params=ocp.args.StandardSave({"w": np.ones(2)}),
+                                            meta=ocp.args.JsonSave({"step": 3, "layout": layout})))
+  ckpts.wait()
+  state, meta = ckpts.restore_latest_good(_state(0.0), say=said.append)
+  assert meta["step"] == 2 and np.array_equal(state.params["w"], np.full((3, 4), 2.0, np.float32))
+  assert len(said) == 1 and "checkpoint 3 " in said[0] and "falling back to checkpoint 2" in said[0]

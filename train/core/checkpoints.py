@@ -35,6 +35,11 @@ class CheckpointError(Exception):
   """No readable checkpoint, or one that does not fit the run."""
 
 
+class DamagedCheckpoint(CheckpointError):
+  """A checkpoint whose parts disagree (its state's bytes and the layout in its metadata): damaged,
+  not another run's; a resume falls back to the one before it."""
+
+
 def _plain(tree):
   return jax.tree_util.tree_map(np.asarray, serialization.to_state_dict(tree))
 
@@ -84,7 +89,7 @@ def leaf_arrays(arrays: dict, layout: list[dict]) -> dict[str, np.ndarray]:
   data, out, at = np.asarray(arrays[PACKED], np.uint8), {}, 0
   sizes = [int(np.prod(leaf["shape"], dtype=np.int64)) * np.dtype(leaf["dtype"]).itemsize for leaf in layout]
   if sum(sizes) != data.size:
-    raise CheckpointError(f"the checkpoint's state holds {data.size:,} bytes, its layout {sum(sizes):,}")
+    raise DamagedCheckpoint(f"the checkpoint's state holds {data.size:,} bytes, its layout {sum(sizes):,}")
   for i, (leaf, size) in enumerate(zip(layout, sizes)):
     if size:
       out[f"leaf_{i:05d}"] = data[at:at + size].view(leaf["dtype"]).reshape(leaf["shape"])
@@ -175,8 +180,10 @@ class RunCheckpoints:
     for i, step in enumerate(steps):
       try:
         return self.restore_state(step, target)
-      except CheckpointError:
-        raise
+      except CheckpointError as e:
+        if not isinstance(e, DamagedCheckpoint):
+          raise  # another run's checkpoint: no older one fits either
+        say(unreadable_warning(self.dir, steps, i, e))
       except Exception as e:  # orbax / tensorstore raise many types for damaged files
         say(unreadable_warning(self.dir, steps, i, e))
     raise CheckpointError(f"no readable checkpoint in {self.dir}")
