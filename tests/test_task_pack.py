@@ -153,7 +153,9 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
     mp.setattr(evaluation, "vmapped_trials", lambda: True)
     mp.setattr(evaluation, "EVAL_ENVS_PER_CALL", 9)
     assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
-  assert "for 4 policies of 4 runs in one program, 3 a call (9 environments at most)" in capsys.readouterr().err
+  said = capsys.readouterr().err
+  assert "for 4 policies of 4 runs in one program, 3 a call (9 environments at most)" in said
+  assert "restored 4 policies in " in said and "hardest: done in " in said  # where its time went
   scenes = suite_scenes(load_config(ASC))
   assert len(scenes) >= 4 and scenes == suite_scenes(load_config(DES))
   together = {(f, scene): json.load(open(report_path(f, scene, None))) for f in folders for scene in scenes}

@@ -6,7 +6,11 @@ import glob
 import json
 import multiprocessing
 import os
+import re
 import shutil
+import subprocess
+import sys
+import time
 
 import jax
 import numpy as np
@@ -143,12 +147,16 @@ def test_sigkill_then_resume_continues_bit_for_bit_past_a_corrupt_checkpoint(ppo
   assert events[0] == "started" and "crashed" in events and events[-2:] == ["checkpoint", "finished"]
 
 
-def test_evaluation_writes_a_valid_report_equal_to_the_in_training_probe(ppo_run, tmp_path):
+def test_evaluation_writes_a_valid_report_equal_to_the_in_training_probe(ppo_run, tmp_path, capsys):
   """`train.evaluate --scene hardest` of the exported policy runs the very trials of the
-  in-training hardest probe (train.core.probe) of the final state: the same figures."""
+  in-training hardest probe (train.core.probe) of the final state: the same figures; it says how
+  long the scene took."""
   out, database = ppo_run
   report = str(tmp_path / "eval.json")
+  t0 = time.monotonic()
   assert evaluate.main([out, "--scene", "hardest", "--out", report, "--db", database]) == 0
+  took = re.search(r"^hardest: done in ([\d.]+) s \((\d+) s since the process started\)$", capsys.readouterr().err, re.M)
+  assert took and float(took.group(1)) <= time.monotonic() - t0 + 0.1 and int(took.group(2)) >= float(took.group(1)) - 1
   with open(report) as f:
     r = json.load(f)
   assert r["trials"] == evaluate.EVAL_TRIALS and r["scene"] == "hardest"
@@ -161,6 +169,16 @@ def test_evaluation_writes_a_valid_report_equal_to_the_in_training_probe(ppo_run
   for column, figure in (("progress_mean", "progress"), ("success_rate", "success"),
                          ("pitch_rate_mean", "pitch_rate"), ("tipped_rate", "tipped_over")):
     assert probe[0][column] == pytest.approx(r["metrics"][figure]["mean"], abs=1e-6), column
+
+
+def test_the_evaluations_process_age_is_the_time_since_its_process_started():
+  """train.evaluate's 'since the process started' (from /proc) against the parent's clock: a
+  process that sleeps 1 s, then imports the module and asks."""
+  code = "import time; time.sleep(1.0); from train.evaluate import _process_age; print(_process_age())"
+  t0 = time.monotonic()
+  said = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                        cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))).stdout
+  assert 1.0 <= float(said.split()[-1]) <= time.monotonic() - t0 + 0.02  # /proc's clock ticks: 0.01 s
 
 
 def test_bad_input_fails_with_one_line_and_overwrites_nothing(ppo_run, tmp_path, capsys):

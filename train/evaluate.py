@@ -21,7 +21,8 @@ in one process, the runs of one network whose tasks one program can take as data
 `train.run --seeds` / `--tasks`) in one vmapped rollout per scene program (at most
 train.evaluation.EVAL_ENVS_PER_CALL environments a call, policies x trials; on the CPU one policy
 after another), every run's reports and trial rows its own (the same trials as alone; floats
-within the vmap's rounding).
+within the vmap's rounding). On stderr each scene says how long it took (its program's compilation
+in the first scene of a program) and the seconds since the process started.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import functools
 import json
 import os
 import sys
+import time
 
 from mjx_tracks import atomic
 from mjx_tracks.baselines import ALGO as BASELINE_ALGO, BASELINES, baseline
@@ -174,7 +176,9 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
   import jax  # noqa: PLC0415
   import numpy as np  # noqa: PLC0415
   slots = [(i, b) for i, bs in enumerate(budgets) for b in bs]  # one policy each
+  t0 = time.monotonic()
   loaded = [_policy(runs[i][0], None, b) for i, b in slots]  # (make_act, params, step): one network (_several)
+  _took(f"restored {len(slots)} policies", t0)
   params = jax.tree_util.tree_map(lambda *x: np.stack(x), *[p for _, p, _ in loaded])
   own = [cfgs[i] for i, _ in slots]
   run = policies_runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
@@ -191,10 +195,32 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
     print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
           f"for {len(slots)} policies of {len(runs)} runs {how}, compiling first where no scene before it "
           "shares its program ...", file=sys.stderr, flush=True)
+    t0 = time.monotonic()
     for (i, budget), (_, _, step), per_trial in zip(slots, loaded, run(params, scene)):
       folder, meta = runs[i]
       out = _write_report(args, folder, meta, scene, budget, step, per_trial)
       yield _summary(meta["task"], scene, budget, args.trials, per_trial, out)
+    _took(f"{scene}: done", t0)
+
+
+def _took(what: str, t0: float) -> None:
+  """'WHAT in S s (T s since the process started)' on stderr: where an evaluation's time goes (the
+  first scene of a program includes its compilation; the time since the start, the imports too)."""
+  age = _process_age()
+  since = "" if age is None else f" ({age:.0f} s since the process started)"
+  print(f"{what} in {time.monotonic() - t0:.1f} s{since}", file=sys.stderr, flush=True)
+
+
+def _process_age() -> float | None:
+  """Seconds since this process started (Linux's /proc: field 22 of its stat is its start in clock
+  ticks after boot), or None where that cannot be read."""
+  try:
+    with open("/proc/self/stat") as f:
+      start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])  # the fields after the name start at field 3
+    with open("/proc/uptime") as f:
+      return float(f.read().split()[0]) - start_ticks / os.sysconf("SC_CLK_TCK")
+  except (OSError, ValueError, IndexError):
+    return None
 
 
 def _network(run_dir: str) -> str:
@@ -213,6 +239,7 @@ def _evaluate(args, meta: dict, scenes: list[str], budgets: list[int | None], cf
     print(f"{scene}: running {args.trials} trials of up to {steps} steps ({len(budgets)} "
           f"polic{'y' if len(budgets) == 1 else 'ies'}; compiling first where no scene before it shares its "
           "program: a minute or more the first time on this machine) ...", file=sys.stderr, flush=True)
+    t0 = time.monotonic()
     for budget, (_, params, policy_step) in policies.items():
       per_trial, qpos, render_model = run(params, scene)
       out = _write_report(args, args.run_dir, meta, scene, budget, policy_step, per_trial)
@@ -222,6 +249,7 @@ def _evaluate(args, meta: dict, scenes: list[str], budgets: list[int | None], cf
         frames = render_frames(render_model, shown, **camera_for(scene_kind(cfg0.scene.kind).camera))
         write_video(args.video, frames, fps=1 / cfg0.control.period)
       yield _summary(meta["task"], scene, budget, args.trials, per_trial, out)
+    _took(f"{scene}: done", t0)
 
 
 def _evaluate_robustness(args, meta: dict, bases: list[str], budgets: list[int | None], cfg0: TaskConfig):
