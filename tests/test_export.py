@@ -59,14 +59,16 @@ def test_the_robustness_suite_runs_every_case_and_low_friction_hurts_full_thrott
   nominal robot (the earlier measure: 0.19 vs 1.0). The grid is the test's own three cases."""
   from mjx_tracks.envs.config import load_config
   from train import evaluate
-  from train.evaluation import robustness_scenes
+  from train.evaluation import robustness_bases, robustness_scenes
   half = '"randomization.friction_along=[0.5, 0.5]", "randomization.friction_across=[0.5, 0.5]"'
   grid = (f'evaluation.robustness=[{{name: nominal, set: []}}, {{name: half-friction, set: [{half}]}}, '
           '{name: late, set: ["randomization.action_delay=[period, period]"]}]')
   out = tmp_path / "full"
   assert evaluate.main([str(out), "--baseline", "full", "--task", "asc-inc-cog", "--robustness", "--trials", "2",
                         "--set", grid, "--db", str(tmp_path / "db.sqlite")]) == 0
-  scenes = robustness_scenes(load_config("asc-inc-cog", [grid]))
+  said, cfg = capsys.readouterr().err, load_config("asc-inc-cog", [grid])
+  assert all(f"{base}: done in " in said for base in robustness_bases(cfg))  # each base scene's time
+  scenes = robustness_scenes(cfg)
   assert len(scenes) == 2 * 3
   progress = {}
   for scene in scenes:

@@ -262,11 +262,13 @@ def _evaluate_robustness(args, meta: dict, bases: list[str], budgets: list[int |
   for base in bases:
     print(f"{base}: running {len(cases)} robustness cases x {args.trials} trials in one batch ...",
           file=sys.stderr, flush=True)
+    t0 = time.monotonic()
     for budget, (_, params, policy_step) in policies.items():
       for case, per_trial in run(params, base).items():
         scene = f"{base}{ROBUST}{case}"
         out = _write_report(args, args.run_dir, meta, scene, budget, policy_step, per_trial)
         yield _summary(meta["task"], scene, budget, args.trials, per_trial, out)
+    _took(f"{base}: done", t0)
 
 
 def _write_report(args, run_dir: str, meta: dict, scene: str, budget: int | None, policy_step,
