@@ -69,3 +69,30 @@ def test_models_breaking_the_step_assumptions_are_refused(default_physics, edit,
   mjx_private.check_model(mujoco.MjModel.from_xml_string(xml))
   with pytest.raises(ValueError, match=message):
     mjx_private.check_model(mujoco.MjModel.from_xml_string(edit(xml)))
+
+
+@pytest.fixture(scope="module")
+def solver_inputs(jaguar_stairs, reference):
+  """Robot 1 standing on its contacts after the reference's substeps, moving at 0-3x its velocity
+  there (robots whose solvers converge after different numbers of passes), each run through
+  mjx.forward: the inputs of a constraint solve (its Jacobian, reference accelerations, warm start)."""
+  m = jaguar_stairs.model
+  scales = jnp.linspace(0.0, 3.0, 6)
+  return jax.jit(jax.vmap(lambda k: mjx.forward(m, reference.replace(qvel=k * reference.qvel))))(scales)
+
+
+def test_solve_equals_mjx_solver_alone_and_batched(jaguar_stairs, solver_inputs):
+  """The fixed-length loop gives MJX's solver.solve's accelerations and forces bit for bit, for one
+  robot and for a batch whose robots converge after different numbers of passes (vmap runs MJX's
+  while loop until the last one has)."""
+  from mujoco.mjx._src import solver
+  m = jaguar_stairs.model
+  fields = lambda d: (d.qacc, d.qfrc_constraint, d._impl.efc_force)
+  ours = jax.jit(jax.vmap(lambda d: fields(mjx_private.solve(m, d))))(solver_inputs)
+  theirs = jax.jit(jax.vmap(lambda d: fields(solver.solve(m, d))))(solver_inputs)
+  one = jax.tree.map(lambda x: x[3], solver_inputs)
+  ours_one = jax.jit(lambda d: fields(mjx_private.solve(m, d)))(one)
+  theirs_one = jax.jit(lambda d: fields(solver.solve(m, d)))(one)
+  for a, b in zip(ours + ours_one, theirs + theirs_one):
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+  assert float(np.abs(np.asarray(ours[2])).max()) > 0  # the robots stand on contacts
