@@ -73,12 +73,13 @@ def test_models_breaking_the_step_assumptions_are_refused(default_physics, edit,
 
 @pytest.fixture(scope="module")
 def solver_inputs(jaguar_stairs, reference):
-  """Robot 1 standing on its contacts after the reference's substeps, moving at 0-3x its velocity
-  there (robots whose solvers converge after different numbers of passes), each run through
-  mjx.forward: the inputs of a constraint solve (its Jacobian, reference accelerations, warm start)."""
+  """Robot 1 spawned (just above the floor) and standing on its contacts after the reference's
+  substeps at 0-3x its velocity there, each run through mjx.forward: the inputs of a constraint
+  solve (its Jacobian, reference accelerations, warm start). MJX's solver converges after 1, 2, 3,
+  4 and 4 of its 4 Newton passes on them (mujoco-mjx 3.17.0)."""
   m = jaguar_stairs.model
-  scales = jnp.linspace(0.0, 3.0, 6)
-  return jax.jit(jax.vmap(lambda k: mjx.forward(m, reference.replace(qvel=k * reference.qvel))))(scales)
+  batch = [_resting(jaguar_stairs)] + [reference.replace(qvel=k * reference.qvel) for k in (0.0, 1.0, 2.0, 3.0)]
+  return jax.jit(jax.vmap(lambda d: mjx.forward(m, d)))(jax.tree.map(lambda *x: jnp.stack(x), *batch))
 
 
 def test_solve_equals_mjx_solver_alone_and_batched(jaguar_stairs, solver_inputs):
@@ -90,7 +91,7 @@ def test_solve_equals_mjx_solver_alone_and_batched(jaguar_stairs, solver_inputs)
   fields = lambda d: (d.qacc, d.qfrc_constraint, d._impl.efc_force)
   ours = jax.jit(jax.vmap(lambda d: fields(mjx_private.solve(m, d))))(solver_inputs)
   theirs = jax.jit(jax.vmap(lambda d: fields(solver.solve(m, d))))(solver_inputs)
-  one = jax.tree.map(lambda x: x[3], solver_inputs)
+  one = jax.tree.map(lambda x: x[1], solver_inputs)  # converged after 2 passes
   ours_one = jax.jit(lambda d: fields(mjx_private.solve(m, d)))(one)
   theirs_one = jax.jit(lambda d: fields(solver.solve(m, d)))(one)
   for a, b in zip(ours + ours_one, theirs + theirs_one):
