@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# On a GPU host: MJX's constraint solver as MJX runs it (solver.solve: a while loop whose condition the
+# GPU reads back to the host after every Newton pass) against mjx_private.solve (the same passes in a
+# loop of fixed length; the same figures bit for bit, tests/test_mjx_private.py), one after the other,
+# each variant with a compilation cache of its own, empty at the start:
+#   1. python -m train.bench env --envs 40,4096: the batched environment step's rate;
+#   2. the paper study's SAC program (its 40 one-robot runs, the pack `python -m train.study paper-packed
+#      --plan` prints) for 2,000 steps, no evaluation: its training steps/s and compile s (its database).
+# The "while" variant sets mjx_private.solve = solver.solve before anything is traced.
+# Writes $OUT/solver-loop.json. Usage: bash scripts/gpu/solver_loop.sh
+set -euo pipefail
+export PYTHONUNBUFFERED=1 OUT=${OUT:-.}
+WHILE='from mujoco.mjx._src import solver; from mjx_tracks.sim import mjx_private; mjx_private.solve = solver.solve;'
+run() {  # VARIANT MODULE ARGS...: `python -m MODULE ARGS` with the variant's solver
+  local variant=$1 module=$2; shift 2
+  local pre=""; [ "$variant" = while ] && pre=$WHILE
+  python3 -c "import runpy, sys; $pre sys.argv[0] = '$module'; runpy.run_module('$module', run_name='__main__', alter_sys=True)" "$@"
+}
+read -ra SAC <<< "$(python3 -c 'import shlex
+from train.study.spec import cells,load_study,pack_train_args,packs_of
+r=[c for c in cells(load_study("paper-packed",("baselines=[]",))) if not c.is_baseline]
+print(shlex.join(next(pack_train_args(p) for p in packs_of(r) if p[0].algo=="sac")))')"
+echo "${SAC[@]}" > "$OUT/sac-args.txt"
+for v in while fixed; do
+  MJX_TRACKS_CACHE=/tmp/solver-loop-$v timeout "${ENV_S:-150}" run $v train.bench env --envs 40,4096 --reps 20 \
+    --out "$OUT/env-$v.json" > "$OUT/env-$v.log" 2>&1 || echo "env $v: exit $?" >> "$OUT/failures.txt"
+done
+for v in while fixed; do
+  s=$(date +%s.%N)
+  MJX_TRACKS_CACHE=/tmp/solver-loop-$v timeout "${SAC_S:-220}" run $v train.run "${SAC[@]}" --steps 2000 --hp num_evals=1 \
+    --hp training_metrics_steps=500 --probe-every 0 --out "/tmp/solver-loop-$v-run" --db "$OUT/sac-$v.sqlite" \
+    > "$OUT/sac-$v.log" 2>&1 || echo "sac $v: exit $?" >> "$OUT/failures.txt"
+  echo "$v $(python3 -c "print(round($(date +%s.%N)-$s,1))")" >> "$OUT/sac-walls.txt"
+done
+python3 - <<'PY'
+import json, os, subprocess
+from train.bench.runs import compile_seconds, steady_rate, training_rates
+out = os.environ["OUT"]; res = {"env": {}, "sac": {}}
+for v in ("while", "fixed"):
+  p = f"{out}/env-{v}.json"
+  res["env"][v] = json.load(open(p))["rows"] if os.path.exists(p) else None
+walls = dict(l.split() for l in open(f"{out}/sac-walls.txt"))
+for v in ("while", "fixed"):
+  db = f"{out}/sac-{v}.sqlite"
+  try:
+    rates = training_rates(db)
+    res["sac"][v] = {"wall_s": float(walls[v]), "compile_s": compile_seconds(db), "rates": rates,
+                     "steady_steps_per_s": steady_rate(rates)}
+  except Exception as e:  # noqa: BLE001
+    res["sac"][v] = {"error": repr(e)}
+  print(v, res["sac"][v])
+dev = subprocess.run(["nvidia-smi", "--query-gpu=name,driver_version", "--format=csv,noheader"], capture_output=True, text=True).stdout.strip()
+json.dump({"device": dev, "date": subprocess.run(["date", "-u", "+%FT%TZ"], capture_output=True, text=True).stdout.strip(),
+           "command": "bash scripts/gpu/solver_loop.sh", **res}, open(f"{out}/solver-loop.json", "w"), indent=1)
+PY
