@@ -11,10 +11,10 @@
 set -euo pipefail
 export PYTHONUNBUFFERED=1 OUT=${OUT:-.}
 WHILE='from mujoco.mjx._src import solver; from mjx_tracks.sim import mjx_private; mjx_private.solve = solver.solve;'
-run() {  # VARIANT MODULE ARGS...: `python -m MODULE ARGS` with the variant's solver
-  local variant=$1 module=$2; shift 2
+run() {  # SECONDS VARIANT MODULE ARGS...: `python -m MODULE ARGS` with the variant's solver, cut after SECONDS
+  local seconds=$1 variant=$2 module=$3; shift 3
   local pre=""; [ "$variant" = while ] && pre=$WHILE
-  python3 -c "import runpy, sys; $pre sys.argv[0] = '$module'; runpy.run_module('$module', run_name='__main__', alter_sys=True)" "$@"
+  MJX_TRACKS_CACHE=/tmp/solver-loop-$variant timeout "$seconds" python3 -c "import runpy, sys; $pre sys.argv[0] = '$module'; runpy.run_module('$module', run_name='__main__', alter_sys=True)" "$@"
 }
 read -ra SAC <<< "$(python3 -c 'import shlex
 from train.study.spec import cells,load_study,pack_train_args,packs_of
@@ -22,12 +22,12 @@ r=[c for c in cells(load_study("paper-packed",("baselines=[]",))) if not c.is_ba
 print(shlex.join(next(pack_train_args(p) for p in packs_of(r) if p[0].algo=="sac")))')"
 echo "${SAC[@]}" > "$OUT/sac-args.txt"
 for v in while fixed; do
-  MJX_TRACKS_CACHE=/tmp/solver-loop-$v timeout "${ENV_S:-150}" run $v train.bench env --envs 40,4096 --reps 20 \
+  run "${ENV_S:-150}" $v train.bench env --envs 40,4096 --reps 20 \
     --out "$OUT/env-$v.json" > "$OUT/env-$v.log" 2>&1 || echo "env $v: exit $?" >> "$OUT/failures.txt"
 done
 for v in while fixed; do
   s=$(date +%s.%N)
-  MJX_TRACKS_CACHE=/tmp/solver-loop-$v timeout "${SAC_S:-220}" run $v train.run "${SAC[@]}" --steps 2000 --hp num_evals=1 \
+  run "${SAC_S:-220}" $v train.run "${SAC[@]}" --steps 2000 --hp num_evals=1 \
     --hp training_metrics_steps=500 --probe-every 0 --out "/tmp/solver-loop-$v-run" --db "$OUT/sac-$v.sqlite" \
     > "$OUT/sac-$v.log" 2>&1 || echo "sac $v: exit $?" >> "$OUT/failures.txt"
   echo "$v $(python3 -c "print(round($(date +%s.%N)-$s,1))")" >> "$OUT/sac-walls.txt"
