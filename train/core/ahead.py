@@ -1,10 +1,14 @@
 """Programs compiled ahead of their first use: a run's in-training evaluations (Brax's evaluator,
-the probe) compile in threads of their own while the main thread compiles the training step.
+the probe) compile in threads of their own once the training step has compiled, while the run trains.
 
-XLA compiles without Python's lock and with threads of its own, so on a GPU host's cores the
-compilations overlap. The first evaluation then finds its program compiled: JAX's caches serve a
-call with the program that `jit(f).lower(args).compile()` made for arguments of the same shapes,
-dtypes and placement. On one H100 the PPO run's training step compiles in 30-42 s, Brax's
+XLA compiles without Python's lock and with threads of its own, so the compilations overlap the
+training on a GPU. Started beside the training step's compilation instead, they held it back: the
+paper study's SAC program (40 one-robot runs) compiled its training step in 87-90 s with its first
+evaluation and probe beside it, 39-42 s without them (one H200, 2026-11-29:
+results/speed/group/compile-order-H200-2026-11-29.json, results/speed/profile/solver-loop-H200-2026-11-29.json),
+and its first evaluation comes ~45 s into its training. The first evaluation then finds its program
+compiled: JAX's caches serve a call with the program that `jit(f).lower(args).compile()` made for
+arguments of the same shapes, dtypes and placement. On one H100 the PPO run's training step compiles in 30-42 s, Brax's
 evaluator in ~24 s and the probe in ~16 s, one after the other (docs/benchmarks.md, "Compilation
 under XLA flags"). A program's first evaluation and probe cost its 40 SAC runs 46 s and 32 s on an
 H200 (results/speed/group/paper-packed-2-H200-2026-11-28.md).

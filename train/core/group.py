@@ -194,8 +194,8 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   states = init_group(t, plans, tasks)
   evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
-  ahead.start(options.compile_ahead, (evaluate, probe), states)  # compiling beside the update's compilation
   update, seconds = compile_group(t, len(plans), tasks=tasks)
+  ahead.start(options.compile_ahead, (evaluate, probe), states)  # compiling while the runs train (train.core.ahead)
   for db, plan in zip(dbs, plans):
     db.compiled(plan.run_id, 0, seconds)
   parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,

@@ -25,7 +25,7 @@ from train.core.progress import Reporter
 class SessionOptions:
   checkpoint_every_s: float = CHECKPOINT_EVERY_S
   keep_checkpoints: int = KEEP
-  compile_ahead: str = ahead.DEFAULT  # the evaluations' programs compiled beside the training step's: train.core.ahead
+  compile_ahead: str = ahead.DEFAULT  # the evaluations' programs compiled while the run trains: train.core.ahead
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,8 +83,8 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
           options: SessionOptions) -> tuple[Loop, Reporter]:
   plan = t.plan
   evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
-  ahead.start(options.compile_ahead, (evaluate, probe), state)  # compiling beside the update's compilation
   update, seconds = compile_update(t)
+  ahead.start(options.compile_ahead, (evaluate, probe), state)  # compiling while the run trains (train.core.ahead)
   db.compiled(plan.run_id, start_step, seconds)
   primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
   reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,
