@@ -116,10 +116,29 @@ def test_a_stop_request_ends_every_run_of_the_program():
   assert results == [("interrupted", 0)] * 2
 
 
-def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys):
+def _spied(monkeypatch, names: dict, ahead_event: str) -> list:
+  """The order in which train.core.group's functions `names` (-> the event each names) return and
+  train.core.ahead.start is called with a computation to compile (-> ahead_event)."""
+  from train.core import ahead, group
+  order = []
+  for name, event in names.items():
+    real = getattr(group, name)
+    monkeypatch.setattr(group, name, lambda *a, real=real, event=event, **k: (real(*a, **k), order.append(event))[0])
+  start = ahead.start
+  monkeypatch.setattr(ahead, "start", lambda choice, computations, example: (
+      order.append(ahead_event) if any(c is not None for c in computations) else None,
+      start(choice, computations, example))[1])
+  return order
+
+
+def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys, monkeypatch):
   out, database = str(tmp_path / "group"), str(tmp_path / "db.sqlite")
+  order = _spied(monkeypatch, {"compile_group": "compiled", "_member": "run's records made"}, "ahead started")
   assert run.main([*TRAIN_TINY, "--seeds", "0,1", "--steps", "512", "--out", out, "--db", database,
                    "--probe-every", "512", "--checkpoint-every", "0", "--compile-ahead", "on"]) == 0
+  # the probe compiles ahead once the training step has compiled and the runs' records are made,
+  # not beside them (train.core.ahead)
+  assert order == ["compiled", "run's records made", "run's records made", "ahead started"]
   said = capsys.readouterr().out
   assert "2 runs" in said and "in one program" in said and "s0 [train]" in said and "s1 [probe]" in said
   d = dbmod.ExperimentDB(database)

@@ -1,5 +1,6 @@
 """Programs compiled ahead of their first use: a run's in-training evaluations (Brax's evaluator,
-the probe) compile in threads of their own once the training step has compiled, while the run trains.
+the probe) compile in threads of their own once the training step has compiled and the runs' records
+are made, while the runs train.
 
 XLA compiles without Python's lock and with threads of its own, so the compilations overlap the
 training on a GPU. Started beside the training step's compilation instead, they held it back: the

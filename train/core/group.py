@@ -195,7 +195,6 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
   update, seconds = compile_group(t, len(plans), tasks=tasks)
-  ahead.start(options.compile_ahead, (evaluate, probe), states)  # compiling while the runs train (train.core.ahead)
   for db, plan in zip(dbs, plans):
     db.compiled(plan.run_id, 0, seconds)
   parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
@@ -205,7 +204,8 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   def after_update(states, step: int) -> None:
     for s in shared:
       s.at(states, step)
-  try:
+  try:  # the evaluations compile while the runs train, their records made (train.core.ahead)
+    ahead.start(options.compile_ahead, (evaluate, probe), states)
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
                      after_update).run(states, 0, plans[0].total_steps)
   finally:

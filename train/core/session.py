@@ -84,7 +84,6 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
   plan = t.plan
   evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
   update, seconds = compile_update(t)
-  ahead.start(options.compile_ahead, (evaluate, probe), state)  # compiling while the run trains (train.core.ahead)
   db.compiled(plan.run_id, start_step, seconds)
   primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
   reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,
@@ -92,6 +91,7 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
                       stream=sys.stdout if primary else open(os.devnull, "w"),
                       wall_offset=db.wall_offset(plan.run_id, start_step))
   loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, stop, schedule_of(t, evaluate, probe))
+  ahead.start(options.compile_ahead, (evaluate, probe), state)  # compiling while the run trains (train.core.ahead)
   return loop, reporter
 
 
