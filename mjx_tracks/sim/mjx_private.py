@@ -57,10 +57,11 @@ def step(m: mjx.Model, d: mjx.Data, on_contacts: ContactHook, aref_shift: ArefHo
 
 
 def solve(m: mjx.Model, d: mjx.Data) -> mjx.Data:
-  """`solver.solve` (Newton) with the same figures, its iterations a loop of m.opt.iterations
-  passes that leave the solver's context as it is once it has converged, where MJX runs a while
-  loop that stops there. A GPU runs a loop of known length without reading its condition back to
-  the host after every pass; MJX's while loop, batched by vmap, runs until every robot has
+  """`solver.solve` (Newton) with the same figures (bit for bit on the CPU: tests/test_mjx_private.py),
+  its iterations a loop of m.opt.iterations passes that leave the solver's context as it is once it
+  has converged, where MJX runs a while loop that stops there. A GPU runs a loop of known length
+  without reading its condition back to the host after every pass (the paper study's SAC program
+  1.17x: docs/benchmarks.md); MJX's while loop, batched by vmap, runs until every robot has
   converged, with the converged ones' contexts kept as they are, as here."""
   d = d.replace(qacc=_warmstart(m, d))
   ctx = solver.Context.create(m, d)
@@ -70,7 +71,8 @@ def solve(m: mjx.Model, d: mjx.Data) -> mjx.Data:
     def one(ctx, _):
       improvement = solver._rescale(m, d, ctx.prev_cost - ctx.cost)
       gradient = solver._rescale(m, d, mjx_math.norm(ctx.grad))
-      go = (improvement >= m.opt.tolerance) & (gradient >= m.opt.tolerance)  # MJX's cond, niter < iterations by the length
+      # MJX's condition (its pass count below m.opt.iterations: the loop's length)
+      go = (improvement >= m.opt.tolerance) & (gradient >= m.opt.tolerance)
       passed = _newton_pass(m, d, ctx)
       return jax.tree.map(lambda new, old: jnp.where(go, new, old), passed, ctx), None
     ctx = jax.lax.scan(one, ctx, None, length=m.opt.iterations)[0]

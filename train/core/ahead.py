@@ -6,12 +6,16 @@ XLA compiles without Python's lock and with threads of its own, so the compilati
 training on a GPU. Started beside the training step's compilation instead, they held it back: the
 paper study's SAC program (40 one-robot runs) compiled its training step in 87-90 s with its first
 evaluation and probe beside it, 39-42 s without them (one H200, 2026-11-29:
-results/speed/group/compile-order-H200-2026-11-29.json, results/speed/profile/solver-loop-H200-2026-11-29.json),
-and its first evaluation comes ~45 s into its training. The first evaluation then finds its program
-compiled: JAX's caches serve a call with the program that `jit(f).lower(args).compile()` made for
-arguments of the same shapes, dtypes and placement. On one H100 the PPO run's training step compiles in 30-42 s, Brax's
-evaluator in ~24 s and the probe in ~16 s, one after the other (docs/benchmarks.md, "Compilation
-under XLA flags"). A program's first evaluation and probe cost its 40 SAC runs 46 s and 32 s on an
+results/speed/group/compile-order-H200-2026-11-29.json,
+results/speed/profile/solver-loop-H200-2026-11-29.json), and its first evaluation comes ~45 s into
+its training. Started before the runs' records (checkpointers, TensorBoard writers) are made, their
+tracing, under Python's lock, held those back
+(results/speed/profile/compile-ahead-after-H200-2026-11-29.json).
+The first evaluation then finds its program compiled: JAX's caches serve a call with the program
+that `jit(f).lower(args).compile()` made for arguments of the same shapes, dtypes and placement. On
+one H100 the PPO run's training step compiles in 30-42 s, Brax's evaluator in ~24 s and the probe
+in ~16 s, one after the other (docs/benchmarks.md, "Compilation under XLA flags"). A program's
+first evaluation and probe compiled at their first use cost its 40 SAC runs 46 s and 32 s on an
 H200 (results/speed/group/paper-packed-2-H200-2026-11-28.md).
 
 `auto` (train.run --compile-ahead) turns it on where JAX's backend is not the CPU. On a CPU the
