@@ -28,10 +28,20 @@ def test_the_command_prints_one_line_per_program_and_refuses_a_missing_study(cap
   said = capsys.readouterr().out.splitlines()
   assert said[0] == ("study paper-packed: 1,033 s from its first start to its last end; 2 programs of 60 runs "
                      "(s from the first start; -: not recorded)")
-  assert said[2].split() == ["paper-sac/asc-inc-cog/20000/s0", "+39", "40", "gpu0", "0", "-", "982", "1,033"]
+  # ... then its first run's clock at its last report: 728 s of training, 127 s besides (855 s)
+  assert said[2].split() == ["paper-sac/asc-inc-cog/20000/s0", "+39", "40", "gpu0", "0", "-", "982", "1,033", "728", "127"]
   assert study_main(["timeline", "nope", "--root", STUDIES]) == 2
   err = capsys.readouterr().err
   assert "no study in" in err and "state.json is missing" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_runs_clock_splits_into_training_and_the_rest():
+  """Reports at 1,000 steps (50 s, 40 steps/s) and 2,000 (80 s, 50 steps/s): 25 + 20 s of training,
+  35 s besides; nothing where a report has no rate or there is none."""
+  assert timeline.run_clock([(1000, 50.0, 40.0), (2000, 80.0, 50.0)]) == (45.0, 35.0)
+  assert timeline.run_clock([]) is None and timeline.run_clock([(1000, 50.0, None)]) is None
+  sac = timeline.programs(os.path.join(STUDIES, "paper-packed"))[0]
+  assert abs(sum(sac.clock) - 855) < 1  # "the SAC pack's clock read 855 s at its last step" (docs/benchmarks.md)
 
 
 def test_a_study_without_its_database_yet_shows_when_its_programs_started(tmp_path):

@@ -2,7 +2,10 @@
 its folder (state.json: which runs trained together in one program) and its database (each attempt's
 run; each run's `compiled` and end-of-training events): per program its runs, its worker, and the
 seconds from the study's first start to the program's start, to its training step compiled, to its
-training ended (its last run's) and to its attempt ended (evaluations included)."""
+training ended (its last run's) and to its attempt ended (evaluations included); then where its first
+run's clock went (its training reports): seconds of training (the steps between two reports over
+their steps/s, which leave evaluations and checkpoints out) and seconds besides (paused), which add
+up to its clock at its last report."""
 
 from __future__ import annotations
 
@@ -12,10 +15,11 @@ import datetime
 import os
 import sys
 
-from train.db import STATUS_EVENT, read_only
+from train.db import STAT_SOURCES, STATUS_EVENT, read_only
 from train.study.executor import STUDY_DB, folder_parser, no_study, read_cells
 
 TRAINING_ENDS = frozenset(STATUS_EVENT.values())  # the events a training session ends with
+TRAIN_SOURCE = STAT_SOURCES[0]  # the stats rows of training reports
 
 
 @dataclasses.dataclass(frozen=True)
@@ -31,6 +35,7 @@ class Program:
   trained: float | None
   ended: float | None
   stopped: bool = False
+  clock: tuple[float, float] | None = None  # its first run's (training s, paused s): run_clock
 
 
 def _epoch(iso: str) -> float:
@@ -51,17 +56,34 @@ def _attempts(folder: str) -> dict[tuple, list[tuple[str, int, dict]]]:
   return grouped
 
 
-def _database(db: str) -> tuple[dict[tuple[str, int], str], dict[str, list[tuple[str, float]]]]:
-  """({(cell, attempt number): run id}, {run id: [(event, time s)]}) of the study's database."""
+def _database(db: str) -> tuple[dict[tuple[str, int], str], dict[str, list[tuple[str, float]]], dict[str, list]]:
+  """({(cell, attempt number): run id}, {run id: [(event, time s)]}, {run id: its training reports
+  [(step, wall s, steps/s)] in step order}) of the study's database."""
   with read_only(db) as c:
     runs = {(cell, n): run_id for cell, n, run_id in c.execute("SELECT cell, attempt, run_id FROM attempts")}
     events: dict = {}
     for run_id, event, time in c.execute("SELECT run_id, event, time FROM events ORDER BY rowid"):
       events.setdefault(run_id, []).append((event, _epoch(time)))
-  return runs, events
+    reports: dict = {}
+    for run_id, step, wall, rate in c.execute("SELECT run_id, step, wall_s, steps_per_s FROM stats WHERE source = ? "
+                                              "ORDER BY run_id, step", (TRAIN_SOURCE,)):
+      reports.setdefault(run_id, []).append((step, wall, rate))
+  return runs, events, reports
 
 
-def _program(members: list[tuple[str, int, dict]], runs: dict, events: dict) -> Program:
+def run_clock(reports: list[tuple[int, float, float | None]]) -> tuple[float, float] | None:
+  """(training s, paused s) of a run's clock at its last training report (reports: [(step, wall s,
+  steps/s)] in step order, from step 0 and wall 0): the steps between two reports over the later
+  one's steps/s, and the rest of its wall time; None without reports or where one has no rate."""
+  if not reports or any(rate is None or rate <= 0 for _, _, rate in reports):
+    return None
+  training, step = 0.0, 0
+  for later, _, rate in reports:
+    training, step = training + (later - step) / rate, later
+  return training, reports[-1][1] - training
+
+
+def _program(members: list[tuple[str, int, dict]], runs: dict, events: dict, reports: dict) -> Program:
   attempts = [a for _, _, a in members]
   start, ends = min(a["started"] for a in attempts), [a.get("ended") for a in attempts]
   end = None if None in ends else max(ends)
@@ -70,9 +92,10 @@ def _program(members: list[tuple[str, int, dict]], runs: dict, events: dict) -> 
           if t >= int(start) and (end is None or t <= end + 1)]
   compiled = [t for e, t in mine if e == "compiled"]
   trained = [t for e, t in mine if e in TRAINING_ENDS]
+  first = runs.get(members[0][:2])
   return Program(tuple(cid for cid, _, _ in members), attempts[0].get("worker"), start,
                  min(compiled) if compiled else None, max(trained) if trained else None, end,
-                 any(a.get("stopped") for a in attempts))
+                 any(a.get("stopped") for a in attempts), run_clock(reports.get(first, [])))
 
 
 def programs(folder: str) -> list[Program]:
@@ -81,12 +104,13 @@ def programs(folder: str) -> list[Program]:
   ended has no database yet: its programs' starts only."""
   db = os.path.join(folder, STUDY_DB)
   grouped = _attempts(folder)
-  runs, events = _database(db) if os.path.exists(db) else ({}, {})
-  return sorted((_program(m, runs, events) for m in grouped.values()), key=lambda p: (p.started, p.cells))
+  runs, events, reports = _database(db) if os.path.exists(db) else ({}, {}, {})
+  return sorted((_program(m, runs, events, reports) for m in grouped.values()), key=lambda p: (p.started, p.cells))
 
 
 def lines(name: str, progs: list[Program]) -> list[str]:
-  """What `timeline` prints: the study's span, then one line per program (s since its first start)."""
+  """What `timeline` prints: the study's span, then one line per program (s since its first start;
+  then its first run's clock: training s, paused s)."""
   if not progs:
     return [f"study {name}: no attempt has started"]
   t0 = min(p.started for p in progs)
@@ -97,13 +121,14 @@ def lines(name: str, progs: list[Program]) -> list[str]:
   out = [f"study {name}: {span}; {len(progs)} programs of {len({c for p in progs for c in p.cells})} runs "
          f"(s from the first start; -: not recorded)",
          f"{'program (its first run, + the others)':<48} {'runs':>4}  {'worker':<8} {'start':>7} {'compiled':>9} "
-         f"{'trained':>8} {'ended':>7}"]
+         f"{'trained':>8} {'ended':>7} {'training':>9} {'paused':>7}"]
   at = lambda t: "-" if t is None else f"{t - t0:,.0f}"  # noqa: E731
   for p in progs:
     first = p.cells[0] + (f" +{len(p.cells) - 1}" if len(p.cells) > 1 else "")
     ended = "stopped" if p.stopped and p.ended is None else at(p.ended)
+    training, paused = ("-", "-") if p.clock is None else (f"{s:,.0f}" for s in p.clock)
     out.append(f"{first:<48} {len(p.cells):>4}  {str(p.worker or '-'):<8} {at(p.started):>7} {at(p.compiled):>9} "
-               f"{at(p.trained):>8} {ended:>7}")
+               f"{at(p.trained):>8} {ended:>7} {training:>9} {paused:>7}")
   return out
 
 
