@@ -8,8 +8,8 @@ paper study's SAC program (40 one-robot runs) compiled its training step in 87-9
 evaluation and probe beside it, 39-42 s without them (one H200, 2026-11-29:
 results/speed/group/compile-order-H200-2026-11-29.json,
 results/speed/profile/solver-loop-H200-2026-11-29.json), and its first evaluation comes ~45 s into
-its training. Started before the runs' records (checkpointers, TensorBoard writers) are made, their
-tracing, under Python's lock, held those back
+its training. Started before the runs' records (checkpointers, TensorBoard writers) were made, their
+tracing under Python's lock most likely held those back: 27.6 s before the first run's first report
 (results/speed/profile/compile-ahead-after-H200-2026-11-29.json).
 The first evaluation then finds its program compiled: JAX's caches serve a call with the program
 that `jit(f).lower(args).compile()` made for arguments of the same shapes, dtypes and placement. On
