@@ -35,7 +35,8 @@ class Program:
   trained: float | None
   ended: float | None
   stopped: bool = False
-  clock: tuple[float, float] | None = None  # its first run's (training s, paused s): run_clock (a resumed run's: its whole clock)
+  # its first run's (training s, paused s): run_clock (a resumed run's: its whole clock)
+  clock: tuple[float, float] | None = None
 
 
 def _epoch(iso: str) -> float:
