@@ -91,3 +91,19 @@ def test_the_shipped_studies_validate_and_the_command_lists_their_runs(capsys):
   assert study_main(["tiny", "--plan", "--set", "retries=-1"]) == 2
   assert study_main([str(STUDIES / "nope.yaml"), "--plan"]) == 2
   assert "no such study file" in capsys.readouterr().err
+
+
+def test_the_gpu_drivers_take_a_studys_pack_as_the_study_runs_it(capsys):
+  """scripts/gpu/pack_args.py: the paper study's SAC pack is its 40 one-robot runs in one program
+  (4 tasks x 5 seeds x 2 early stops); a study without a pack of the algorithm says so and exits 2."""
+  import importlib.util
+  import shlex
+  path = pathlib.Path(__file__).parent.parent / "scripts" / "gpu" / "pack_args.py"
+  spec = importlib.util.spec_from_file_location("pack_args", path)
+  script = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(script)
+  assert script.main(["sac"]) == 0
+  args = run_parser().parse_args(shlex.split(capsys.readouterr().out))
+  assert (args.algo, args.preset, args.steps, args.seeds) == ("sac", "paper", 20000, "0,1,2,3,4")
+  assert (args.tasks.count(","), args.early_stops) == (3, "return,none")
+  assert script.main(["td3"]) == 2 and "no pack of td3 runs" in capsys.readouterr().err

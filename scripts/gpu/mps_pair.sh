@@ -26,21 +26,12 @@ for variant in "$@"; do
     || { echo "error: a variant is SHARE:PRIORITY (e.g. 85:1), got '$variant'" >&2; exit 2; }
 done
 [ $# -gt 0 ] || { echo "usage: EACH=270 bash scripts/gpu/mps_pair.sh SHARE:PRIORITY ..." >&2; exit 2; }
-# train.study's share of the SMs, then the study's two packs' train.run arguments, one line each: "sac ARGS"
-# and "ppo ARGS"
-packs=$(python3 -c '
-import shlex
-from train.study.mps import SM_SHARE
-print("share", SM_SHARE)
-from train.study.spec import cells, load_study, pack_train_args, packs_of
-runs = [c for c in cells(load_study("paper-packed", ("baselines=[]",))) if not c.is_baseline]
-for pack in packs_of(runs):
-  print(pack[0].algo, shlex.join(pack_train_args(pack)))') || exit 1
-study_share=$(grep '^share ' <<< "$packs" | cut -d' ' -f2)
-read -ra sac <<< "$(grep '^sac ' <<< "$packs" | cut -d' ' -f2-)"
-read -ra ppo <<< "$(grep '^ppo ' <<< "$packs" | cut -d' ' -f2-)"
-[ ${#sac[@]} -gt 0 ] && [ ${#ppo[@]} -gt 0 ] \
-  || { echo "error: the study has no SAC and PPO packs: $packs" >&2; exit 1; }
+# train.study's share of the SMs, then the study's two packs' train.run arguments (scripts/gpu/pack_args.py)
+study_share=$(python3 -c 'from train.study.mps import SM_SHARE; print(SM_SHARE)') || exit 1
+sac_args=$(python3 scripts/gpu/pack_args.py sac) && ppo_args=$(python3 scripts/gpu/pack_args.py ppo) \
+  || { echo "error: the study has no SAC and PPO packs" >&2; exit 1; }
+read -ra sac <<< "$sac_args"
+read -ra ppo <<< "$ppo_args"
 for variant in "$@"; do
   share=${variant%%:*} priority=${variant#*:}
   dir=$work/$share-$priority && rm -rf "$dir" && mkdir -p "$dir/pipe" "$dir/log"

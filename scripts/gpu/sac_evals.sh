@@ -8,10 +8,8 @@
 # Usage: bash scripts/gpu/sac_evals.sh
 set -euo pipefail
 export PYTHONUNBUFFERED=1 MJX_TRACKS_CACHE=/tmp/sac-cache OUT=${OUT:-.}
-read -ra A <<< "$(python3 -c 'import shlex
-from train.study.spec import cells,load_study,pack_train_args,packs_of
-r=[c for c in cells(load_study("paper-packed",("baselines=[]",))) if not c.is_baseline]
-print(shlex.join(next(pack_train_args(p) for p in packs_of(r) if p[0].algo=="sac")))')"
+args=$(python3 scripts/gpu/pack_args.py sac)
+read -ra A <<< "$args"
 echo "${A[@]}" > "$OUT/args.txt"
 rm -f "$OUT/walls.txt"
 for n in 1 6; do

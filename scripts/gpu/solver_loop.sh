@@ -19,10 +19,8 @@ run() {  # SECONDS VARIANT MODULE ARGS...: `python -m MODULE ARGS` with the vari
   local pre=""; [ "$variant" = while ] && pre=$WHILE
   MJX_TRACKS_CACHE=/tmp/solver-loop-$variant timeout "$seconds" python3 -c "import runpy, sys; $pre sys.argv[0] = '$module'; runpy.run_module('$module', run_name='__main__', alter_sys=True)" "$@"
 }
-read -ra SAC <<< "$(python3 -c 'import shlex
-from train.study.spec import cells,load_study,pack_train_args,packs_of
-r=[c for c in cells(load_study("paper-packed",("baselines=[]",))) if not c.is_baseline]
-print(shlex.join(next(pack_train_args(p) for p in packs_of(r) if p[0].algo=="sac")))')"
+args=$(python3 scripts/gpu/pack_args.py sac)
+read -ra SAC <<< "$args"
 echo "${SAC[@]}" > "$W/sac-args.txt"
 for v in while fixed; do
   run "${ENV_S:-150}" $v train.bench env --envs 40,4096 --reps 20 \
