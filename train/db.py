@@ -65,6 +65,7 @@ SCHEMA = SCHEMA.format(  # the metric columns: mjx_tracks.metrics
     trial_columns=", ".join(f"{m.name} {'INTEGER' if m.integer else 'REAL'}" for m in EPISODE))
 STAT_COLUMNS = ("step", "wall_s", "steps_per_s", "eps", "return_mean", *REPORT_COLUMN.values(), "source")
 STAT_SOURCES = ("train", "eval", "probe")  # training episodes, Brax's evaluator (uniform scenes), train.core.probe
+TRAIN_SOURCE = STAT_SOURCES[0]  # the stats rows of training reports (not evaluations or probes)
 OLD_SOURCES = {"hardest": "probe"}  # a source's name in databases written before it was renamed
 # "compiled": the training step compiled (its detail: the seconds until it was ready, e.g. "34.215", a wait for
 # another process compiling it included: mjx_tracks.jax_private; train.bench.runs reads it)

@@ -8,9 +8,7 @@ import datetime
 import os
 import statistics
 
-from train.db import STAT_SOURCES, ExperimentDB
-
-TRAIN_SOURCE = STAT_SOURCES[0]  # the stats rows of training reports (not evaluations or probes)
+from train.db import TRAIN_SOURCE, ExperimentDB
 
 
 def _db(db_path: str) -> ExperimentDB:

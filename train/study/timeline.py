@@ -15,11 +15,10 @@ import datetime
 import os
 import sys
 
-from train.db import STAT_SOURCES, STATUS_EVENT, read_only
+from train.db import STATUS_EVENT, TRAIN_SOURCE, read_only
 from train.study.executor import STUDY_DB, folder_parser, no_study, read_cells
 
 TRAINING_ENDS = frozenset(STATUS_EVENT.values())  # the events a training session ends with
-TRAIN_SOURCE = STAT_SOURCES[0]  # the stats rows of training reports
 
 
 @dataclasses.dataclass(frozen=True)
