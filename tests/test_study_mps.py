@@ -121,6 +121,8 @@ def test_the_daemon_is_used_only_where_a_probes_cuda_context_went_through_it(con
   monkeypatch.setattr(mps, "PROBE_TIMEOUT", 1)
   if probe:
     monkeypatch.setattr(mps, "_CLIENT_PROBE", probe)
+  if not error:  # Dask's first import registers exit handlers of its own: before atexit is stood in for
+    import distributed  # noqa: F401
   at_exit = []
   monkeypatch.setattr(cluster.atexit, "register", at_exit.append)
   monkeypatch.setattr(cluster.atexit, "unregister", at_exit.remove)
