@@ -30,8 +30,8 @@ def main(out_path: str, runs: list[str]) -> dict:
   params = lambda d: os.path.join(os.path.abspath(d), "params")  # noqa: E731
   one = ocp.StandardCheckpointer()
   target = functools.cache(lambda: jax.tree_util.tree_map(np.asarray, serialization.to_state_dict(spec.init_policy_params())))
-  for name, fn in (("load_policy_params, first pass", lambda d: load_policy_params(d)),
-                   ("load_policy_params, again", lambda d: load_policy_params(d)),
+  for name, fn in (("load_policy_params, first pass", load_policy_params),
+                   ("load_policy_params, again", load_policy_params),
                    ("init_policy_params", lambda d: jax.block_until_ready(spec.init_policy_params())),
                    ("restore, a checkpointer each", lambda d: jax.block_until_ready(ocp.StandardCheckpointer().restore(params(d)))),
                    ("restore, one checkpointer", lambda d: jax.block_until_ready(one.restore(params(d)))),
