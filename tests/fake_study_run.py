@@ -4,7 +4,7 @@ checkpoint in its database (with --seeds S,S,..., one folder OUT/s<seed> per see
 OUT/<task>/s<seed>, with --early-stops C,C,... OUT/stop-<criterion>/... (train.core.run_record.seed_folder),
 side by side; each run.json lists its sessions' seeds (and tasks, early stops) under "programs"); `evaluate RUN --suite --trials N [--milestones]` records N trials per
 scene of fake_success() and writes eval-hardest.json (with several RUNs, each) (with --baseline NAME --task TASK, first a run
-record of its own). FAKE_CRASH_SEED: that seed's first session
+record of its own; with --await-runs, started beside the training, only the RUNs that stdin names once it closes). FAKE_CRASH_SEED: that seed's first session
 exits 1 after its checkpoint at FAKE_CRASH_STEP (default 100); FAKE_EARLY_SEED: that seed's run stops
 early at step 200 (status stopped_early); FAKE_SLOW_SEED: that seed sleeps 1 s per checkpoint (time to
 kill its worker); SIGTERM ends a session like train.run's: run 'interrupted', exit 143."""
@@ -109,9 +109,15 @@ def train(argv: list[str]) -> int:
 
 
 def evaluate(argv: list[str]) -> int:
-  """Each RUN given before the options (a pack's runs together), or a baseline's folder."""
+  """Each RUN given before the options (a pack's runs together), or a baseline's folder; with
+  --await-runs those of them that stdin names."""
   runs = argv[:next(i for i, a in enumerate(argv) if a.startswith("--"))]
-  return max(evaluate_one(out, argv) for out in runs)
+  if "--await-runs" in argv:
+    named = [line.strip() for line in sys.stdin if line.strip()]
+    assert set(named) <= set(runs), (named, runs)
+    print(f"evaluating {len(named)} of {len(runs)} runs beside the training (named on stdin)")
+    runs = named
+  return max((evaluate_one(out, argv) for out in runs), default=0)
 
 
 def evaluate_one(out: str, argv: list[str]) -> int:

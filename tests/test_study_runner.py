@@ -266,8 +266,9 @@ def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_ow
   study = {**STUDY, "seeds": [0, 1, 2], "baselines": [], "retries": 0,
            "groups": [{**STUDY["groups"][0], "pack_seeds": True}]}
   spec, folder = study_from_dict(study), str(tmp_path / "study")
-  with local_cluster(_workers(tmp_path, slow="", FAKE_EARLY_SEED="2", FAKE_CRASH_STEP="300")) as cluster, \
-       Client(cluster) as client:
+  # workers whose JAX is not kept to the CPU: a pack's evaluation starts beside its training
+  with local_cluster(_workers(tmp_path, slow="", FAKE_EARLY_SEED="2", FAKE_CRASH_STEP="300", JAX_PLATFORMS="")) \
+       as cluster, Client(cluster) as client:
     counts = StudyRunner(spec, folder, client, COMMANDS, backends=("cpu",), stream=io.StringIO()).run()
   assert counts == {"done": 6, "running": 0, "queued": 0, "failed": 0}
   state = json.load(open(os.path.join(folder, "state.json")))["cells"]
@@ -279,6 +280,8 @@ def test_a_pack_of_seeds_trains_as_one_program_and_each_run_comes_back_as_its_ow
     checkpoints = sorted(int(d) for d in os.listdir(os.path.join(run, "checkpoints")))
     if c.seed == 2:  # ended by its early stop before the crash: evaluated, never trained again
       assert [(a["rc"], a["phase"]) for a in attempts] == [(0, "evaluate")]
+      said = open(os.path.join(run, "study-attempts.log")).read()
+      assert "evaluating 1 of 3 runs beside the training" in said  # the one that ended, named when the training did
       assert meta["programs"] == ["0,1,2"] and checkpoints[-1] == 200
       assert db.run(meta["run_id"])["status"] == "stopped_early"
     else:
@@ -322,6 +325,8 @@ def test_a_pack_of_tasks_and_groups_trains_as_one_program_and_each_run_comes_bac
     assert [r["run_id"] for r in own] == [meta["run_id"]]
     trials = [e for e in db.evals(meta["run_id"]) if e["scene"] == "hardest"]
     assert sum(e["success"] for e in trials) == sum(fake_success(c.task, c.seed, 200, i) for i in range(4))
+    said = open(os.path.join(cell_folder(folder, c), "study-attempts.log")).read()
+    assert "beside the training" not in said  # CPU workers: the evaluation starts after the training
 
 
 def test_packs_join_across_tasks_only_where_one_program_takes_their_differences_as_data():

@@ -4,6 +4,7 @@ moved where the worker shares the study's filesystem, else as a tar."""
 
 import dataclasses
 import os
+import time
 
 from train.study import worker
 
@@ -30,6 +31,44 @@ def test_a_packs_runs_are_evaluated_in_one_process_and_each_keeps_its_exit_code_
   folders["bad"] = str(tmp_path / "bad")
   os.makedirs(folders["bad"])
   assert {code for _, code, _ in worker._evaluate_together(folders, ["--suite"], (str(script),), "x", str(tmp_path)).values()} == {3}
+
+
+AWAITING = """import sys, time
+runs = sys.argv[1:sys.argv.index("--suite")]
+assert sys.argv[-1] == "--await-runs"
+if runs[0].endswith("dies"):
+  sys.exit(7)  # as one that fails while it compiles, before it is told the runs
+print("compiled", flush=True)
+named = [line.strip() for line in sys.stdin if line.strip()]
+for run in named:
+  open(run + "/evaluated", "w").write("beside")
+print("evaluated", *named)
+"""
+
+
+def test_a_packs_evaluation_beside_its_training_evaluates_the_runs_it_is_told_once_the_training_ended(tmp_path):
+  """EarlyEvaluation (worker.run_pack on a GPU worker): the process starts with every run of the pack
+  and waits (while the training runs); `finish` names the runs that ended and returns the process's
+  exit code and output for each. None ended: it is stopped, nothing evaluated. A process that ended
+  before it was told: None (run_pack then evaluates in a new process)."""
+  script = tmp_path / "awaiting.py"
+  script.write_text(AWAITING)
+  folders = {m: str(tmp_path / m) for m in ("a", "b", "c")}
+  for folder in folders.values():
+    os.makedirs(folder)
+  beside = worker.EarlyEvaluation(list(folders.values()), ["--suite"], (str(script),), "pack.sqlite", str(tmp_path))
+  time.sleep(0.5)
+  assert beside.proc.poll() is None  # waiting to be told
+  done = beside.finish({m: folders[m] for m in ("a", "c")})
+  assert {m: code for m, (_, code, _) in done.items()} == {"a": 0, "c": 0}
+  assert f"evaluated {folders['a']} {folders['c']}" in done["a"][2] and "compiled" in done["c"][2]
+  assert sorted(os.listdir(tmp_path / "a")) == ["evaluated"] and not os.listdir(tmp_path / "b")
+  idle = worker.EarlyEvaluation(list(folders.values()), ["--suite"], (str(script),), "x", str(tmp_path / "b"))
+  assert idle.finish({}) == {} and idle.proc.returncode is not None  # stopped: its training ended no run
+  assert not os.path.exists(tmp_path / "b" / "evaluated")
+  dead = worker.EarlyEvaluation([str(tmp_path / "dies")], ["--suite"], (str(script),), "x", str(tmp_path / "c"))
+  dead.proc.wait()
+  assert dead.finish({"dies": str(tmp_path / "dies")}) is None
 
 
 def _files(folder) -> list[str]:

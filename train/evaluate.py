@@ -156,6 +156,10 @@ def parser() -> argparse.ArgumentParser:
                       "e.g. of a killed run")
   p.add_argument("--milestones", action="store_true", help="also evaluate the policy exported at each "
                  "milestone budget (train.run --milestones), RUN_DIR/milestones/<budget>")
+  p.add_argument("--await-runs", action="store_true", help="started beside the training of the RUN_DIRs (a "
+                 "study's pack, train.study.worker): wait for their first checkpoints, compile the evaluation's "
+                 "programs for their network while they train, then evaluate the runs that stdin names (a "
+                 "RUN_DIR a line) once it closes; none named: nothing evaluated (train.eval_ahead)")
   return p
 
 
@@ -167,22 +171,34 @@ def _policies(args, budgets: list[int | None], cfg: TaskConfig):
   return {b: _policy(args.run_dir, args.checkpoint, b) for b in budgets}, (lambda s: s.obs)
 
 
+def stacked_params(params: list):
+  """Policies' parameters (one network) stacked on a leading policy axis, as numpy arrays."""
+  import jax  # noqa: PLC0415
+  import numpy as np  # noqa: PLC0415
+  return jax.tree_util.tree_map(lambda *x: np.stack(x), *params)
+
+
+def slots_runner(args, scenes: list[str], own: list[TaskConfig], make_act):
+  """train.evaluation.policies_runner for policies whose tasks are `own` (one a policy)."""
+  return policies_runner(own[0], scenes, make_act, args.trials, args.eps, args.seed,
+                         None if all(c == own[0] for c in own) else own)
+
+
 def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: list[tuple[str, dict]],
-                      budgets: list[list[int | None]]):
+                      budgets: list[list[int | None]], run=None):
   """Each scene with the policy of each budget of every run (runs[i]: (folder, record), config
   cfgs[i]) in one vmapped rollout (train.evaluation.pack_trial_runner: one compilation per program
   of scene_programs; on the CPU one policy after another: vmapped_trials), every run's reports and
-  trials its own; yields the summary lines."""
-  import jax  # noqa: PLC0415
-  import numpy as np  # noqa: PLC0415
+  trials its own; yields the summary lines. run: slots_runner's for the runs' final policies, built
+  (and compiled) before, e.g. while they trained (train.eval_ahead); not used for more policies."""
   slots = [(i, b) for i, bs in enumerate(budgets) for b in bs]  # one policy each
   t0 = time.monotonic()
   loaded = [_policy(runs[i][0], None, b) for i, b in slots]  # (make_act, params, step): one network (_several)
   _took(f"restored {len(slots)} policies", t0)
-  params = jax.tree_util.tree_map(lambda *x: np.stack(x), *[p for _, p, _ in loaded])
-  own = [cfgs[i] for i, _ in slots]
-  run = policies_runner(cfgs[0], scenes, loaded[0][0], args.trials, args.eps, args.seed,
-                        None if all(c == cfgs[0] for c in own) else own)
+  params = stacked_params([p for _, p, _ in loaded])
+  ready = run is not None and len(slots) == len(runs)
+  if not ready:
+    run = slots_runner(args, scenes, [cfgs[i] for i, _ in slots], loaded[0][0])
   from train import evaluation  # noqa: PLC0415  (its vmapped_trials, as policies_runner reads it)
   per_call = evaluation.policies_per_call(len(slots), args.trials)
   if not evaluation.vmapped_trials():
@@ -193,8 +209,9 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
     how = "in one program"
   for scene in scenes:
     print(f"{scene}: running {args.trials} trials of up to {scene_config(cfgs[0], scene).episode.max_steps} steps "
-          f"for {len(slots)} policies of {len(runs)} runs {how}, compiling first where no scene before it "
-          "shares its program ...", file=sys.stderr, flush=True)
+          f"for {len(slots)} policies of {len(runs)} runs {how}, "
+          f"{'its program compiled ahead' if ready else 'compiling first where no scene before it shares its program'}"
+          " ...", file=sys.stderr, flush=True)
     t0 = time.monotonic()
     for (i, budget), (_, _, step), per_trial in zip(slots, loaded, run(params, scene)):
       folder, meta = runs[i]
@@ -223,9 +240,14 @@ def _process_age() -> float | None:
     return None
 
 
+def network_key(network: dict) -> str:
+  """A policy's network (its spec's JSON) as a key: runs of equal keys share evaluation programs."""
+  return json.dumps(network, sort_keys=True)
+
+
 def _network(run_dir: str) -> str:
   from train.core.policy import load_policy_info  # noqa: PLC0415
-  return json.dumps(load_policy_info(os.path.join(run_dir, "policy"))["network"], sort_keys=True)
+  return network_key(load_policy_info(os.path.join(run_dir, "policy"))["network"])
 
 
 def _evaluate(args, meta: dict, scenes: list[str], budgets: list[int | None], cfg0: TaskConfig):
@@ -342,7 +364,9 @@ def main(argv: list[str] | None = None) -> int:
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   try:
-    lines = _one(args) if len(args.run_dirs) <= 1 else _several(args)
+    if args.await_runs:  # beside a training that holds most of the GPU's memory: take it as needed
+      os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
+    lines = _one(args) if len(args.run_dirs) <= 1 and not args.await_runs else _several(args)
     for line in lines:
       print(line, flush=True)
   except (ConfigError, FileNotFoundError, ValueError) as e:
@@ -371,29 +395,43 @@ def _several(args):
   """The summary lines of several runs' evaluations: the scenes of runs that may share a program in
   one (_evaluate_several, in groups: mjx_tracks.envs.task_data.packing_conflict), the robustness
   suite run by run."""
-  from mjx_tracks.envs.task_data import packing_conflict  # noqa: PLC0415
   if args.baseline or args.task or args.out or args.video or args.checkpoint is not None:
-    raise ValueError("--baseline, --task, --out, --video and --checkpoint take one RUN_DIR")
-  runs = [(d, read_run_record(d)) for d in dict.fromkeys(args.run_dirs)]
+    raise ValueError("--baseline, --task, --out, --video and --checkpoint take one RUN_DIR" +
+                     (" (and --await-runs is for a pack's runs)" if args.await_runs else ""))
+  folders, ahead = list(dict.fromkeys(args.run_dirs)), {}
+  if args.await_runs:
+    from train.eval_ahead import compile_ahead, named_runs  # noqa: PLC0415
+    ahead = compile_ahead(args, folders, sys.stdin)
+    folders = named_runs(sys.stdin, folders)
+  runs = [(d, read_run_record(d)) for d in folders]
   cfgs = [recorded_config(meta["config"], args.set) for _, meta in runs]
   jobs = [_jobs(args, cfg, d) for cfg, (d, _) in zip(cfgs, runs)]
   networks = [_network(d) for d, _ in runs]
+  for g in pack_groups(cfgs, [scenes for scenes, _, _ in jobs], networks):
+    if jobs[g[0]][0]:
+      key = (tuple(folders[i] for i in g), tuple(jobs[g[0]][0]), networks[g[0]])
+      yield from _evaluate_several(args, jobs[g[0]][0], [cfgs[i] for i in g], [runs[i] for i in g],
+                                   [jobs[i][2] for i in g], ahead.get(key))
+  for (d, meta), cfg, (_, bases, budgets) in zip(runs, cfgs, jobs):
+    if bases:
+      yield from _evaluate_robustness(argparse.Namespace(**{**vars(args), "run_dir": d}), meta, bases, budgets, cfg)
+
+
+def pack_groups(cfgs: list[TaskConfig], scenes: list[list[str]], networks: list[str]) -> list[list[int]]:
+  """The runs (their tasks, scenes, network_key) in groups whose evaluations one program takes:
+  tasks that differ in data only (mjx_tracks.envs.task_data.packing_conflict), the same scenes, one
+  network; each group's indices in order."""
+  from mjx_tracks.envs.task_data import packing_conflict  # noqa: PLC0415
   groups: list[list[int]] = []
   for i, cfg in enumerate(cfgs):
-    fits = (g for g in groups if packing_conflict(cfg, cfgs[g[0]]) is None and jobs[i][0] == jobs[g[0]][0]
+    fits = (g for g in groups if packing_conflict(cfg, cfgs[g[0]]) is None and scenes[i] == scenes[g[0]]
             and networks[i] == networks[g[0]])
     group = next(fits, None)
     if group is None:
       groups.append([i])
     else:
       group.append(i)
-  for g in groups:
-    if jobs[g[0]][0]:
-      yield from _evaluate_several(args, jobs[g[0]][0], [cfgs[i] for i in g], [runs[i] for i in g],
-                                   [jobs[i][2] for i in g])
-  for (d, meta), cfg, (_, bases, budgets) in zip(runs, cfgs, jobs):
-    if bases:
-      yield from _evaluate_robustness(argparse.Namespace(**{**vars(args), "run_dir": d}), meta, bases, budgets, cfg)
+  return groups
 
 
 if __name__ == "__main__":

@@ -378,9 +378,12 @@ def policy_by_policy_runner(cfg0: TaskConfig, scenes: list[str], make_act, trial
     return [runner(cfg)(p, scene)[0] for cfg, p in each(params)]
 
   def compile_for(params, scene: str) -> None:
-    """Each task's program compiled for params like these, ahead of run (train.core.ahead)."""
+    """The scene's program of each task compiled for params like these, ahead of run (train.core.ahead;
+    once a task: its policies share it)."""
+    done: list[TaskConfig] = []
     for cfg, p in each(params):
-      if not any(c == cfg for c, _ in runners):
+      if not any(c == cfg for c in done):
+        done.append(cfg)
         runner(cfg).compile_for(p, scene)
 
   run.compile_for = compile_for

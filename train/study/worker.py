@@ -197,22 +197,29 @@ def run_cell(run_args: list[str], eval_args: list[str], resume: bytes | None, tr
 
 
 def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
-             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE), handoff: Handoff | None = None) -> dict:
+             commands: tuple[tuple[str, ...], tuple[str, ...]] = (TRAIN, EVALUATE), handoff: Handoff | None = None,
+             early: bool | None = None) -> dict:
   """First attempts of cells that differ only in their seed (and task, early stop:
   train.study.spec.packs_of), as one program (`train.run --seeds [--tasks] [--early-stops]`);
   members: each run's folder in the program's output (train.study.spec.pack_folders); then the
   runs that ended (their total steps or their early stop; also where the program failed later, e.g.
-  by another run) are evaluated together, in one process (_evaluate_together). Returns
-  {"cells": {member: run_cell's result}}: each run's folder comes back with its own records
-  (run.sqlite) and the pack's training and evaluation output."""
+  by another run) are evaluated together, in one process (_evaluate_together). early: that process
+  starts beside the training and compiles its programs meanwhile (EarlyEvaluation; default: where
+  this worker's JAX is not kept to the CPU, early_evaluation_here). Returns {"cells": {member:
+  run_cell's result}}: each run's folder comes back with its own records (run.sqlite) and the
+  pack's training and evaluation output."""
   scratch = tempfile.mkdtemp(prefix="study-pack-")
   out, shared_db, log = (os.path.join(scratch, name) for name in ("pack", "pack.sqlite", "train.log"))
+  folders = {m: os.path.join(out, m) for m in members}
+  beside = EarlyEvaluation(list(folders.values()), eval_args, commands[1], shared_db, scratch) \
+      if eval_args and (early_evaluation_here() if early is None else early) else None
   try:
     rc = _call([sys.executable, *commands[0], *pack_args, "--out", out, "--db", shared_db], log, None, "train")
-    folders = {m: os.path.join(out, m) for m in members}
     ended = {m: folders[m] for m in members if _ended(folders[m], shared_db)}
-    evaluated = _evaluate_together(ended, eval_args, commands[1], shared_db, scratch) if eval_args and ended \
-        else {m: ("train", 0, "") for m in ended}
+    evaluated = beside.finish(ended) if beside is not None else None
+    if evaluated is None:  # none beside the training, or it had stopped before it was told the runs
+      evaluated = _evaluate_together(ended, eval_args, commands[1], shared_db, scratch) if eval_args and ended \
+          else {m: ("train", 0, "") for m in ended}
     for m in members:  # each run's rows (training and evaluation) in a database of its own, as a single run's
       if os.path.isdir(folders[m]) and os.path.exists(shared_db):
         ExperimentDB(os.path.join(folders[m], RUN_DB)).import_runs(shared_db, only=[run_id_in(folders[m])])
@@ -222,7 +229,64 @@ def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
       results[m] = _outcome(folders[m], code, phase, trained + output, handoff)
     return {"cells": results}
   finally:
+    if beside is not None:
+      beside.stop()
     shutil.rmtree(scratch, ignore_errors=True)
+
+
+def early_evaluation_here() -> bool:
+  """Whether a pack's evaluation starts beside its training on this worker: where its JAX may use
+  an accelerator (JAX_PLATFORMS is not `cpu`). On a CPU worker its compilation would take cores
+  from the training (a study's CPU slots run one-thread runs side by side)."""
+  return os.environ.get("JAX_PLATFORMS", "").strip().lower() != "cpu"
+
+
+class EarlyEvaluation:
+  """A pack's evaluation started beside its training (`train.evaluate RUN ... --await-runs`,
+  train.eval_ahead): it compiles its programs while the runs train, and evaluates the runs that
+  `finish` names once the training has ended. On the paper study's SAC pack (one H200) the
+  evaluation started after the training took ~60 s, of which ~45 s were its start-up and
+  compilation (results/speed/profile/final-evaluation-40-sac-runs-H200-2026-11-29.json)."""
+
+  def __init__(self, folders: list[str], eval_args: list[str], command: tuple[str, ...], db: str, scratch: str):
+    self.log = os.path.join(scratch, "evaluate.log")  # _evaluate_together's too: one log of the pack's evaluation
+    with open(self.log, "a") as out:
+      self.proc = subprocess.Popen([sys.executable, *command, *folders, *eval_args, "--db", db, "--await-runs"],
+                                   stdin=subprocess.PIPE, stdout=out, stderr=subprocess.STDOUT, text=True,
+                                   env=os.environ.copy())
+
+  def finish(self, ended: dict[str, str]) -> dict[str, tuple[str, int, str]] | None:
+    """{member: ("evaluate", the process's exit code, its output)} of the `ended` runs ({member:
+    folder}), once the process has evaluated them; {} where none ended (the process is stopped);
+    None where the process had stopped before (e.g. it failed while compiling): the caller
+    evaluates them in a new one."""
+    if not ended or self.proc.poll() is not None:
+      self.stop()
+      return {} if not ended else None
+    try:
+      self.proc.stdin.write("".join(f"{folder}\n" for folder in ended.values()))
+      self.proc.stdin.close()
+    except OSError:  # it stopped meanwhile (a broken pipe)
+      self.stop()
+      return None
+    rc = self.proc.wait()
+    output = open(self.log).read() if os.path.exists(self.log) else ""
+    return {m: ("evaluate", rc, output) for m in ended}
+
+  def stop(self) -> None:
+    """Ends the process if it still runs (the pack's training failed, or the attempt is cut off)."""
+    if self.proc.poll() is None:
+      self.proc.terminate()
+      try:
+        self.proc.wait(timeout=30)
+      except subprocess.TimeoutExpired:
+        self.proc.kill()
+        self.proc.wait()
+    if self.proc.stdin and not self.proc.stdin.closed:
+      try:
+        self.proc.stdin.close()
+      except OSError:
+        pass
 
 
 def _ended(folder: str, db: str) -> bool:
