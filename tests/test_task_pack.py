@@ -8,6 +8,7 @@ configs that differ beyond the data a program takes are refused in one line befo
 written."""
 
 import dataclasses
+import io
 import json
 import os
 
@@ -139,22 +140,42 @@ def _the_memory_check_reports_what_xla_plans_for_the_programs_states(args, capsy
   assert script.main(["--tasks", f"{ASC},asc-hard", "--seeds", "0", *SAC_TINY]) == 2
 
 
+class _Stdin(io.StringIO):
+  """A stdin that notes whether it has been read."""
+  read_from = False
+
+  def __iter__(self):
+    self.read_from = True
+    return super().__iter__()
+
+
 def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
-  """`train.evaluate RUN RUN ...` (a study's pack): the four runs' suites in one program, the two
-  tasks as data; each run's reports and trial rows its own (the database beside its folder), each
+  """`train.evaluate RUN RUN ... --await-runs` (a study's pack, started beside its training): the
+  four runs' suites in one program, the two tasks as data, compiled before stdin named the runs and
+  not traced again; each run's reports and trial rows its own (the database beside its folder), each
   as `train.evaluate RUN` of the run alone writes them (the same trials: floats within the vmap's
   rounding)."""
   from train import evaluate, evaluation
   from train.db import ExperimentDB, default_path
   from train.evaluation import report_path, suite_scenes
+  stdin, traced = _Stdin("".join(f"{f}\n" for f in folders)), []
+  original = evaluation.trial_rollout
+
+  def recording(*args, **kwargs):  # each trace of a rollout: whether stdin had named the runs by then
+    core, rollout = original(*args, **kwargs)
+    return core, lambda *a, **k: (traced.append(stdin.read_from), rollout(*a, **k))[1]
   # on the CPU one policy after another (vmapped_trials); here vmapped, as on a GPU, 3 policies a
   # call (EVAL_ENVS_PER_CALL: 9 environments): the second call the last run's, filled up with copies
   with pytest.MonkeyPatch.context() as mp:
     mp.setattr(evaluation, "vmapped_trials", lambda: True)
     mp.setattr(evaluation, "EVAL_ENVS_PER_CALL", 9)
-    assert evaluate.main([*folders, "--suite", "--trials", "3"]) == 0
+    mp.setattr(evaluation, "trial_rollout", recording)
+    mp.setattr("sys.stdin", stdin)
+    assert evaluate.main([*folders, "--suite", "--trials", "3", "--await-runs"]) == 0
+  assert traced == [False]  # one program, traced (and compiled) ahead only
   said = capsys.readouterr().err
-  assert "for 4 policies of 4 runs in one program, 3 a call (9 environments at most)" in said
+  assert "compiled the evaluation of 4 runs ahead (1 group(s))" in said and "evaluating 4 of 4 runs" in said
+  assert "for 4 policies of 4 runs in one program, 3 a call (9 environments at most), its program compiled ahead" in said
   assert "restored 4 policies in " in said and "hardest: done in " in said  # where its time went
   scenes = suite_scenes(load_config(ASC))
   assert len(scenes) >= 4 and scenes == suite_scenes(load_config(DES))
