@@ -1,0 +1,81 @@
+"""`python scripts/gpu/early_eval.py OUT_JSON [STEPS]`: on a GPU host, the paper study's SAC pack (its
+40 one-robot runs, scripts/gpu/pack_args.py's program) trained for STEPS steps (default 4,000; three
+in-training evaluations) and evaluated on the study's suite (100 trials a scene), as a study's worker
+runs it (train.study.worker.run_pack), twice: first with the evaluation started after the training
+(early=False, as before 2026-11-29), then beside it (early=True: `train.evaluate --await-runs`,
+train.eval_ahead). Each variant has a compilation cache of its own, empty at its start. Writes the
+seconds of each phase (the training process, then from its end to the evaluation's) and the
+evaluation's own timing lines to OUT_JSON. The first checkpoints, which the early evaluation waits for,
+come ~60 s into the training (CHECKPOINT_EVERY_S): at fewer steps it would have no time to compile."""
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+from train.study import worker
+from train.study.spec import cells, load_study, pack_folders, pack_train_args, packs_of
+
+STUDY = "paper-packed"
+
+
+def sac_pack():
+  spec = load_study(STUDY, ("baselines=[]",))
+  pack = next(p for p in packs_of([c for c in cells(spec) if not c.is_baseline]) if p[0].algo == "sac")
+  return pack_train_args(pack), pack_folders(pack), pack[0].eval_args(spec.eval_trials)
+
+
+def timed_pack(early: bool, steps: int, root: str) -> dict:
+  """run_pack of the SAC pack with its evaluation early or not; the phases' seconds."""
+  train_args, members, eval_args = sac_pack()
+  marks, call, together, finish = {}, worker._call, worker._evaluate_together, worker.EarlyEvaluation.finish
+
+  def timed(name, fn):
+    def wrapper(*a, **k):
+      out = fn(*a, **k)
+      marks[name] = time.monotonic()
+      return out
+    return wrapper
+  worker._call = timed("trained", call)
+  worker._evaluate_together = timed("evaluated", together)
+  worker.EarlyEvaluation.finish = timed("evaluated", finish)
+  os.environ["MJX_TRACKS_CACHE"] = os.path.join(root, f"cache-{early}")
+  handoff, _lock = worker.Handoff.create(os.path.join(root, f"study-{early}"))
+  args = [*train_args, "--steps", str(steps), "--hp", "num_evals=3"]
+  t0 = time.monotonic()
+  try:
+    res = worker.run_pack(args, members, eval_args, handoff=handoff, early=early)
+  finally:
+    worker._call, worker._evaluate_together, worker.EarlyEvaluation.finish = call, together, finish
+  first = res["cells"][members[0]]
+  log = open(os.path.join(first["moved"], "study-attempts.log")).read() if first.get("moved") else ""
+  timing = [line for line in log.splitlines() if re.search(r" in [\d.]+ s(\)| \()", line) and "[" not in line]
+  return {"early": early, "rc": sorted({c["rc"] for c in res["cells"].values()}),
+          "phases": sorted({c["phase"] for c in res["cells"].values()}),
+          "training_process_s": round(marks["trained"] - t0, 1),
+          "after_training_s": round(marks["evaluated"] - marks["trained"], 1),
+          "pack_s": round(time.monotonic() - t0, 1), "evaluation_lines": timing}
+
+
+def main(argv: list[str]) -> int:
+  out, steps = argv[0], int(argv[1]) if len(argv) > 1 else 4000
+  root = "/tmp/early-eval"
+  shutil.rmtree(root, ignore_errors=True)  # a warm machine keeps /tmp: empty caches
+  os.makedirs(root)
+  result = {"command": f"python scripts/gpu/early_eval.py OUT_JSON {steps}",
+            "device": subprocess.run(["nvidia-smi", "--query-gpu=name", "--format=csv,noheader"],
+                                     capture_output=True, text=True).stdout.strip(),
+            "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "pack_args": sac_pack()[0],
+            "eval_args": sac_pack()[2], "variants": []}
+  for early in (False, True):
+    result["variants"].append(timed_pack(early, steps, root))
+    print(json.dumps(result["variants"][-1]), flush=True)
+    json.dump(result, open(out, "w"), indent=1)
+  return 0
+
+
+if __name__ == "__main__":
+  sys.exit(main(sys.argv[1:]))
