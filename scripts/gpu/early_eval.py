@@ -33,13 +33,15 @@ def timed_pack(early: bool, steps: int, root: str) -> dict:
   train_args, members, eval_args = sac_pack()
   marks, call, together, finish = {}, worker._call, worker._evaluate_together, worker.EarlyEvaluation.finish
 
-  def timed(name, fn):
+  def timed(name, fn, only=lambda a, k: True):
     def wrapper(*a, **k):
       out = fn(*a, **k)
-      marks[name] = time.monotonic()
+      if only(a, k):
+        marks[name] = time.monotonic()
       return out
     return wrapper
-  worker._call = timed("trained", call)
+  # _call(argv, log, pid_path, phase) runs the training, and the evaluation after it (early=False)
+  worker._call = timed("trained", call, lambda a, k: (a[3] if len(a) > 3 else k.get("phase")) == "train")
   worker._evaluate_together = timed("evaluated", together)
   worker.EarlyEvaluation.finish = timed("evaluated", finish)
   os.environ["MJX_TRACKS_CACHE"] = os.path.join(root, f"cache-{early}")
