@@ -133,12 +133,13 @@ def _spied(monkeypatch, names: dict, ahead_event: str) -> list:
 
 def test_seeds_train_as_runs_of_their_own_in_one_program(tmp_path, capsys, monkeypatch):
   out, database = str(tmp_path / "group"), str(tmp_path / "db.sqlite")
-  order = _spied(monkeypatch, {"compile_group": "compiled", "_member": "run's records made"}, "ahead started")
+  order = _spied(monkeypatch, {"lower_group": "lowered", "compile_group": "compiled", "_member": "run's records made"},
+                 "ahead started")
   assert run.main([*TRAIN_TINY, "--seeds", "0,1", "--steps", "512", "--out", out, "--db", database,
                    "--probe-every", "512", "--checkpoint-every", "0", "--compile-ahead", "on"]) == 0
-  # the probe compiles ahead once the training step has compiled and the runs' records are made,
-  # not beside them (train.core.ahead)
-  assert order == ["compiled", "run's records made", "run's records made", "ahead started"]
+  # the probe traces once the training step is lowered (not beside its tracing), then compiles while
+  # XLA compiles the step (train.core.ahead)
+  assert order == ["lowered", "ahead started", "compiled", "run's records made", "run's records made"]
   said = capsys.readouterr().out
   assert "2 runs" in said and "in one program" in said and "s0 [train]" in said and "s1 [probe]" in said
   d = dbmod.ExperimentDB(database)

@@ -10,7 +10,7 @@ import hashlib
 import json
 import sys
 import time
-from typing import Any
+from typing import Any, Callable
 
 import jax
 from jax.sharding import NamedSharding, PartitionSpec
@@ -86,9 +86,10 @@ def shaped_state(t: Training):
                                 t.abstract, t.shardings)
 
 
-def compile_update(t: Training, stream=None):
+def compile_update(t: Training, stream=None, meanwhile: Callable[[], None] = lambda: None):
   """(the update compiled ahead of time with the state donated, the seconds that took); says
-  beforehand how long it should take (on stream, default: sys.stdout as it is at the call)."""
+  beforehand how long it should take (on stream, default: sys.stdout as it is at the call).
+  meanwhile(): called once the update is lowered, while XLA compiles it (train.core.ahead.start)."""
   stream = stream or sys.stdout  # not the one at import: a caller may have redirected it since
   config = hashlib.sha1(json.dumps(t.plan.cfg.to_dict(), sort_keys=True).encode()).hexdigest()[:8]
   what = (f"{t.plan.task}/{config}/{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/"
@@ -101,7 +102,9 @@ def compile_update(t: Training, stream=None):
   shaped = shaped_state(t)
   jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,),
                    out_shardings=(t.shardings, replicated(t.mesh)), donate_argnums=0)
-  compiled = jitted.lower(shaped).compile()
+  lowered = jitted.lower(shaped)
+  meanwhile()
+  compiled = lowered.compile()
   seconds = time.time() - t0
   compile_cache.record_compile_seconds(what, seconds)  # kept only if the longest yet
   print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)

@@ -121,12 +121,16 @@ def lower_group(t: Training, n: int, tasks: TaskData | None = None):
   return jax.jit(jax.vmap(lambda s, d: learner_on(t, d).update(s)), donate_argnums=0).lower(shaped, tasks)
 
 
-def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = None):
-  """(update(states) of n runs (lower_group's) compiled ahead of time, the seconds that took)."""
+def compile_group(t: Training, n: int, stream=None, tasks: TaskData | None = None,
+                  meanwhile: Callable[[], None] = lambda: None):
+  """(update(states) of n runs (lower_group's) compiled ahead of time, the seconds that took);
+  meanwhile(): called once the update is lowered, while XLA compiles it (train.core.ahead.start)."""
   stream = stream or sys.stdout  # as it is now (a test's capture), not as it was at import
   print(f"compiling the training step of {n} runs in one program ...", file=stream, flush=True)
   t0 = time.time()
-  compiled = lower_group(t, n, tasks).compile()
+  lowered = lower_group(t, n, tasks)
+  meanwhile()
+  compiled = lowered.compile()
   seconds = time.time() - t0
   print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)
   return (compiled if tasks is None else (lambda states: compiled(states, tasks))), seconds
@@ -194,18 +198,18 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   states = init_group(t, plans, tasks)
   evaluate, evaluations = group_evaluations(t, plans, configs)
   probe = GroupProbe(t, configs=configs) if any(p.probe_every for p in plans) else None  # every run's trials in one rollout
-  update, seconds = compile_group(t, len(plans), tasks=tasks)
-  for db, plan in zip(dbs, plans):
-    db.compiled(plan.run_id, 0, seconds)
-  parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
-                   lambda summary, i=i: on_end(i, summary), tag) for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]
-  shared = [s for s in (evaluate, probe) if s is not None]
+  shared, parts = [s for s in (evaluate, probe) if s is not None], []
 
   def after_update(states, step: int) -> None:
     for s in shared:
       s.at(states, step)
-  try:  # the evaluations compile while the runs train, their records made (train.core.ahead)
-    ahead.start(options.compile_ahead, (evaluate, probe), states)
+  try:  # the evaluations trace once the update is lowered, and compile with it and while the runs train
+    update, seconds = compile_group(t, len(plans), tasks=tasks,
+                                    meanwhile=lambda: ahead.start(options.compile_ahead, shared, states))
+    for db, plan in zip(dbs, plans):
+      db.compiled(plan.run_id, 0, seconds)
+    parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
+                     lambda summary, i=i: on_end(i, summary), tag) for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
                      after_update).run(states, 0, plans[0].total_steps)
   finally:
