@@ -1,16 +1,18 @@
 """Programs compiled ahead of their first use: a run's in-training evaluations (Brax's evaluator,
-the probe) compile in threads of their own once the training step has compiled and the runs' records
-are made, while the runs train.
+the probe) trace in threads of their own once the training step is lowered, then compile while XLA
+compiles the step and while the runs train.
 
-XLA compiles without Python's lock and with threads of its own, so the compilations overlap the
-training on a GPU. Started beside the training step's compilation instead, they held it back: the
-paper study's SAC program (40 one-robot runs) compiled its training step in 87-90 s with its first
-evaluation and probe beside it, 39-42 s without them (one H200, 2026-11-29:
-results/speed/group/compile-order-H200-2026-11-29.json,
-results/speed/profile/solver-loop-H200-2026-11-29.json), and its first evaluation comes ~45 s into
-its training. Started before the runs' records (checkpointers, TensorBoard writers) were made, their
-tracing under Python's lock most likely held those back: 27.6 s before the first run's first report
-(results/speed/profile/compile-ahead-after-H200-2026-11-29.json).
+XLA compiles without Python's lock and with threads of its own; tracing holds the lock. Three orders
+were measured on one H200, the paper study's two programs (its SAC program of 40 one-robot runs, its
+PPO program of 20 runs) started together under MPS, each from an empty cache:
+- traced beside the step's own tracing: the SAC step compiled in 87-90 s instead of 39-42 s
+  (results/speed/group/compile-order-H200-2026-11-29.json, results/speed/profile/solver-loop-H200-2026-11-29.json);
+- started after the step had compiled and the runs' records were made: the SAC step compiled in 50 s,
+  but SAC's training window with its first evaluation (~45 s into its training) held 21.5 s besides
+  training, waiting for its program, and PPO's first probe waited ~46 s
+  (results/speed/group/paper-packed-mps-1-H200-2026-11-29d.md);
+- here, once the step is lowered: the SAC step compiled in 41 s, PPO's in 48 s; that SAC window held
+  14.9 s, PPO's first probe waited ~16 s (results/speed/profile/compile-ahead-lowered-H200-2026-11-29.json).
 The first evaluation then finds its program compiled: JAX's caches serve a call with the program
 that `jit(f).lower(args).compile()` made for arguments of the same shapes, dtypes and placement. On
 one H100 the PPO run's training step compiles in 30-42 s, Brax's evaluator in ~24 s and the probe
