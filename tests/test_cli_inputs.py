@@ -148,3 +148,6 @@ def test_a_trained_run_is_evaluated_on_held_out_scenes_added_since_but_never_on_
 def test_train_evaluate_refuses_what_takes_one_run_beside_several_runs(capsys, tmp_path):
   for extra in (["--out", "x.json"], ["--checkpoint"], ["--video", "v.gif"], ["--baseline", "zero", "--task", "asc-inc-cog"]):
     _one_line_error(capsys, evaluate.main([str(tmp_path / "a"), str(tmp_path / "b"), *extra]), "take one RUN_DIR")
+    # nor beside a training (a study's pack), even for one run, before anything is waited for
+    _one_line_error(capsys, evaluate.main([str(tmp_path / "a"), *extra, "--await-runs"]), "drop --baseline")
+  _one_line_error(capsys, evaluate.main(["--await-runs"]), "needs the RUN_DIRs")

@@ -396,8 +396,11 @@ def _several(args):
   one (_evaluate_several, in groups: mjx_tracks.envs.task_data.packing_conflict), the robustness
   suite run by run."""
   if args.baseline or args.task or args.out or args.video or args.checkpoint is not None:
-    raise ValueError("--baseline, --task, --out, --video and --checkpoint take one RUN_DIR" +
-                     (" (and --await-runs is for a pack's runs)" if args.await_runs else ""))
+    raise ValueError("--await-runs evaluates the exported policies of runs that end: drop --baseline, --task, "
+                     "--out, --video and --checkpoint" if args.await_runs else
+                     "--baseline, --task, --out, --video and --checkpoint take one RUN_DIR")
+  if args.await_runs and not args.run_dirs:
+    raise ValueError("--await-runs needs the RUN_DIRs of the runs it waits for")
   folders, ahead = list(dict.fromkeys(args.run_dirs)), {}
   if args.await_runs:
     from train.eval_ahead import compile_ahead, named_runs  # noqa: PLC0415

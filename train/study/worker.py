@@ -210,10 +210,10 @@ def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
   pack's training and evaluation output."""
   scratch = tempfile.mkdtemp(prefix="study-pack-")
   out, shared_db, log = (os.path.join(scratch, name) for name in ("pack", "pack.sqlite", "train.log"))
-  folders = {m: os.path.join(out, m) for m in members}
-  beside = EarlyEvaluation(list(folders.values()), eval_args, commands[1], shared_db, scratch) \
-      if eval_args and (early_evaluation_here() if early is None else early) else None
+  folders, beside = {m: os.path.join(out, m) for m in members}, None
   try:
+    if eval_args and (early_evaluation_here() if early is None else early):
+      beside = EarlyEvaluation(list(folders.values()), eval_args, commands[1], shared_db, scratch)
     rc = _call([sys.executable, *commands[0], *pack_args, "--out", out, "--db", shared_db], log, None, "train")
     ended = {m: folders[m] for m in members if _ended(folders[m], shared_db)}
     evaluated = beside.finish(ended) if beside is not None else None
