@@ -372,6 +372,9 @@ def main(argv: list[str] | None = None) -> int:
   except (ConfigError, FileNotFoundError, ValueError) as e:
     print(f"error: {e}", file=sys.stderr)
     return 2
+  except KeyboardInterrupt:  # Ctrl-C: no traceback; each report file is written whole (atomic) or not at all
+    print("interrupted: the scenes reported above are written; the others are not", file=sys.stderr)
+    return 130
   return 0
 
 
