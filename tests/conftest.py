@@ -107,9 +107,15 @@ def ppo_run(tmp_path_factory):
   return str(out), str(database)
 
 
-# Files that compile the most start first (pytest-xdist hands files out in collection order): the
-# shared PPO run is made early, and no long file starts last while the other worker idles.
-FIRST = ("test_training.py", "test_env.py", "test_training_sac.py", "test_brax_reference.py", "test_evaluator.py")
+# Files that compile the most start first, longest first after the one that makes the shared PPO run
+# (pytest-xdist hands files out in collection order): no long file starts last while the other worker
+# idles. Each file's seconds in a cold suite on the 2-core machine (2026-11-29, --durations): training
+# 89, env 96, group 73, evaluator 71, task_pack 68, runtime 44, physics_gate 42, sb3 39, export 36,
+# stairs_physics 33, study_runner 30, compile_ahead 27, training_sac 24, brax_reference 23; the
+# other ~65 files under 22 each, in name order after these.
+FIRST = ("test_training.py", "test_env.py", "test_group.py", "test_evaluator.py", "test_task_pack.py",
+         "test_runtime.py", "test_physics_gate.py", "test_sb3.py", "test_export.py", "test_stairs_physics.py",
+         "test_study_runner.py", "test_compile_ahead.py", "test_training_sac.py", "test_brax_reference.py")
 
 
 def pytest_collection_modifyitems(items):
