@@ -361,11 +361,11 @@ def main(argv: list[str] | None = None) -> int:
     print(f"error: --trials must be from 1 to {MAX_TRIALS:,}, --eps in [0, 1], --seed from 0 to {MAX_SEED}",
           file=sys.stderr)
     return 2
+  if args.await_runs:  # beside a training that holds most of the GPU's memory: take it as needed (before JAX starts)
+    os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
   from mjx_tracks import compile_cache  # noqa: PLC0415
   compile_cache.enable()
   try:
-    if args.await_runs:  # beside a training that holds most of the GPU's memory: take it as needed
-      os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
     lines = _one(args) if len(args.run_dirs) <= 1 and not args.await_runs else _several(args)
     for line in lines:
       print(line, flush=True)
