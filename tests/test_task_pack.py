@@ -171,6 +171,7 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
     mp.setattr(evaluation, "EVAL_ENVS_PER_CALL", 9)
     mp.setattr(evaluation, "trial_rollout", recording)
     mp.setattr("sys.stdin", stdin)
+    mp.setenv("XLA_PYTHON_CLIENT_PREALLOCATE", "false")  # what --await-runs sets, undone after this test
     assert evaluate.main([*folders, "--suite", "--trials", "3", "--await-runs"]) == 0
   assert traced == [False]  # one program, traced (and compiled) ahead only
   said = capsys.readouterr().err
