@@ -80,8 +80,11 @@ def test_a_program_two_processes_need_at_once_is_compiled_by_one(tmp_path):
   assert [p.returncode for p in (first, second)] == [0, 0], outs
   assert outs[0].splitlines()[-1] == outs[1].splitlines()[-1]  # the same program's result
   assert not os.path.exists(os.path.join(folder, "second-compiling"))  # XLA never compiled it there
-  waited = [line for line in open(log) if line.startswith(f"{second.pid}\t") and "Waited" in line]
-  assert len(waited) == 1 and "jit__lambda" in waited[0] and "loaded from the cache" in waited[0], waited
+  # (under load the second may also wait for a small program of JAX's own, e.g. jit_dynamic_slice,
+  # that the first compiled in over 1 s: only the program of this test counts)
+  waited = [line for line in open(log)
+            if line.startswith(f"{second.pid}\t") and "Waited" in line and "jit__lambda" in line]
+  assert len(waited) == 1 and "loaded from the cache" in waited[0], waited
 
 
 def test_a_lock_that_cannot_be_had_leaves_the_compilation_to_go_on_unlocked(tmp_path, monkeypatch):
