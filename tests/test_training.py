@@ -3,6 +3,7 @@ report, experiment database, bad input (SAC: test_training_sac.py)."""
 
 import datetime
 import glob
+import io
 import json
 import multiprocessing
 import os
@@ -251,7 +252,21 @@ def test_the_suite_evaluates_every_scene_at_every_milestone_with_its_own_policy(
   assert load_policy_info(os.path.join(run_dir, "milestones", "1024"))["step"] == 1024
   # 2 trials: every scene at every milestone is what it checks, not their figures
   assert evaluate.main([run_dir, "--suite", "--milestones", "--trials", "2", "--db", database]) == 0
-  assert evaluate.main([run_dir, "--scene", "hardest", "--milestones", "--trials", "2", "--db", database]) == 0
+  # again, as a study's pack evaluates beside its training (--await-runs): the programs of the
+  # milestone's policy and the final one traced before stdin names the run, never after
+  from train import evaluation
+  traced, original, stdin = [], evaluation.trial_rollout, io.StringIO(run_dir + "\n")
+
+  def recording(*args, **kwargs):
+    core, rollout = original(*args, **kwargs)
+    return core, lambda *a, **k: (traced.append(stdin.tell() > 0), rollout(*a, **k))[1]
+  with pytest.MonkeyPatch.context() as mp:
+    mp.setattr(evaluation, "trial_rollout", recording)
+    mp.setattr("sys.stdin", stdin)
+    mp.setenv("XLA_PYTHON_CLIENT_PREALLOCATE", "false")  # what --await-runs sets, undone after
+    assert evaluate.main([run_dir, "--scene", "hardest", "--milestones", "--trials", "2", "--db", database,
+                          "--await-runs"]) == 0
+  assert traced == [False]  # one program (one task), for both policies
   scenes = ["hardest", "uniform", f"held-out/{HELD_OUT}"]
   for scene in scenes:
     for budget, step in ((1024, 1024), (None, 2048)):

@@ -4,10 +4,11 @@ its training (train.study.worker.run_pack), so that its programs compile while t
 It waits until every run folder has its record and a checkpoint (or its exported policy), compiles
 the evaluation's programs for the runs' network with those parameters (one program per group of
 train.evaluate.pack_groups, for every policy at once: train.evaluation.pack_trial_runner's
-compile_for), then reads the folders to evaluate from stdin, a line each, until it closes: the runs
-that ended. Those groups' evaluations then call the programs compiled here (JAX's caches serve a
-call the program `jit(f).lower(args).compile()` made for arguments of the same shapes); a group that
-differs (a run that did not end, milestones' policies) compiles its own, as without this.
+compile_for; with --milestones, the policies of the budgets each run's record plans too), then reads
+the folders to evaluate from stdin, a line each, until it closes: the runs that ended. Those
+groups' evaluations then call the programs compiled here (JAX's caches serve a call the program
+`jit(f).lower(args).compile()` made for arguments of the same shapes); a group that differs (a run
+that did not end, one that stopped before a milestone) compiles its own, as without this.
 
 Started after the training instead, the paper study's 40-run SAC pack spent ~60 s of its ~67 s
 after training in a new evaluation process on one H200: 5 s of imports, 6.5 s restoring the
@@ -28,31 +29,36 @@ READ_TRIES = 5  # a checkpoint read that fails (the training's clean-up removed 
 
 
 def compile_ahead(args, folders: list[str], stream) -> dict:
-  """{(a group's folders, its scenes, its network_key): its runner (train.evaluate.slots_runner),
-  compiled} for the groups train.evaluate._several will evaluate, once every folder has a checkpoint;
-  {} where `stream` (stdin) speaks first."""
+  """{train.evaluate.runner_key: its runner (train.evaluate.slots_runner), compiled} for the groups
+  train.evaluate._several will evaluate, once every folder has a checkpoint; {} where `stream`
+  (stdin) speaks first."""
   from train.core.policy import act_from_params  # noqa: PLC0415
   from train.core.run_record import read_run_record  # noqa: PLC0415
-  from train.evaluate import _jobs, _took, network_key, pack_groups, recorded_config, slots_runner, stacked_params  # noqa: PLC0415
+  from train.evaluate import (_jobs, _took, network_key, pack_groups, recorded_config, runner_key,  # noqa: PLC0415
+                              slots_runner, stacked_params)
   from train.evaluation import scene_programs  # noqa: PLC0415
   if not _wait_for_checkpoints(folders, stream):
     print("the runs to evaluate were named before every run had a checkpoint: nothing compiled ahead",
           file=sys.stderr, flush=True)
     return {}
   t0 = time.monotonic()
-  cfgs = [recorded_config(read_run_record(d)["config"], args.set) for d in folders]
+  records = [read_run_record(d) for d in folders]
+  cfgs = [recorded_config(meta["config"], args.set) for meta in records]
   scenes = [_jobs(args, cfg, d)[0] for cfg, d in zip(cfgs, folders)]
+  # each run's policies: those of the budgets its record plans (--milestones), then its final one
+  budgets = [[*(sorted(meta.get("milestones") or []) if args.milestones else []), None] for meta in records]
   loaded = [_latest_params(d) for d in folders]  # (network spec, parameters)
   networks = [network_key(spec.to_json()) for spec, _ in loaded]
   compiled = {}
   for g in pack_groups(cfgs, scenes, networks):
     if not scenes[g[0]]:
       continue
-    run = slots_runner(args, scenes[g[0]], [cfgs[i] for i in g], act_from_params(loaded[g[0]][0]))
-    params = stacked_params([loaded[i][1] for i in g])
+    slots = [(i, b) for i in g for b in budgets[i]]  # one policy each, the latest parameters standing in
+    run = slots_runner(args, scenes[g[0]], [cfgs[i] for i, _ in slots], act_from_params(loaded[g[0]][0]))
+    params = stacked_params([loaded[i][1] for i, _ in slots])
     for _, draws in scene_programs(cfgs[g[0]], scenes[g[0]]):
       run.compile_for(params, next(iter(draws)))  # one scene of each program
-    compiled[(tuple(folders[i] for i in g), tuple(scenes[g[0]]), networks[g[0]])] = run
+    compiled[runner_key([(folders[i], b) for i, b in slots], scenes[g[0]], networks[g[0]])] = run
   _took(f"compiled the evaluation of {len(folders)} runs ahead ({len(compiled)} group(s))", t0)
   return compiled
 

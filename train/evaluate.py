@@ -189,14 +189,14 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
   """Each scene with the policy of each budget of every run (runs[i]: (folder, record), config
   cfgs[i]) in one vmapped rollout (train.evaluation.pack_trial_runner: one compilation per program
   of scene_programs; on the CPU one policy after another: vmapped_trials), every run's reports and
-  trials its own; yields the summary lines. run: slots_runner's for the runs' final policies, built
-  (and compiled) before, e.g. while they trained (train.eval_ahead); not used for more policies."""
+  trials its own; yields the summary lines. run: slots_runner's for these policies (runner_key's),
+  built (and compiled) before, e.g. while the runs trained (train.eval_ahead)."""
   slots = [(i, b) for i, bs in enumerate(budgets) for b in bs]  # one policy each
   t0 = time.monotonic()
   loaded = [_policy(runs[i][0], None, b) for i, b in slots]  # (make_act, params, step): one network (_several)
   _took(f"restored {len(slots)} policies", t0)
   params = stacked_params([p for _, p, _ in loaded])
-  ready = run is not None and len(slots) == len(runs)
+  ready = run is not None
   if not ready:
     run = slots_runner(args, scenes, [cfgs[i] for i, _ in slots], loaded[0][0])
   from train import evaluation  # noqa: PLC0415  (its vmapped_trials, as policies_runner reads it)
@@ -238,6 +238,12 @@ def _process_age() -> float | None:
       return float(f.read().split()[0]) - start_ticks / os.sysconf("SC_CLK_TCK")
   except (OSError, ValueError, IndexError):
     return None
+
+
+def runner_key(policies: list[tuple[str, int | None]], scenes: list[str], network: str) -> tuple:
+  """What a runner of _evaluate_several is built for: its policies ((run folder, budget) each, in
+  order), scenes and network (network_key): runners of equal keys are one."""
+  return tuple(policies), tuple(scenes), network
 
 
 def network_key(network: dict) -> str:
@@ -415,7 +421,7 @@ def _several(args):
   networks = [_network(d) for d, _ in runs]
   for g in pack_groups(cfgs, [scenes for scenes, _, _ in jobs], networks):
     if jobs[g[0]][0]:
-      key = (tuple(folders[i] for i in g), tuple(jobs[g[0]][0]), networks[g[0]])
+      key = runner_key([(folders[i], b) for i in g for b in jobs[i][2]], jobs[g[0]][0], networks[g[0]])
       yield from _evaluate_several(args, jobs[g[0]][0], [cfgs[i] for i in g], [runs[i] for i in g],
                                    [jobs[i][2] for i in g], ahead.get(key))
   for (d, meta), cfg, (_, bases, budgets) in zip(runs, cfgs, jobs):
