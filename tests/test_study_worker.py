@@ -63,10 +63,11 @@ def test_a_packs_evaluation_beside_its_training_evaluates_the_runs_it_is_told_on
   assert {m: code for m, (_, code, _) in done.items()} == {"a": 0, "c": 0}
   assert f"evaluated {folders['a']} {folders['c']}" in done["a"][2] and "compiled" in done["c"][2]
   assert sorted(os.listdir(tmp_path / "a")) == ["evaluated"] and not os.listdir(tmp_path / "b")
-  idle = worker.EarlyEvaluation(list(folders.values()), ["--suite"], (str(script),), "x", str(tmp_path / "b"))
+  os.makedirs(tmp_path / "idle")
+  idle = worker.EarlyEvaluation(list(folders.values()), ["--suite"], (str(script),), "x", str(tmp_path / "idle"))
   assert idle.finish({}) == {} and idle.proc.returncode is not None  # stopped: its training ended no run
   assert not os.path.exists(tmp_path / "b" / "evaluated")
-  dead = worker.EarlyEvaluation([str(tmp_path / "dies")], ["--suite"], (str(script),), "x", str(tmp_path / "c"))
+  dead = worker.EarlyEvaluation([str(tmp_path / "dies")], ["--suite"], (str(script),), "x", str(tmp_path / "idle"))
   dead.proc.wait()
   assert dead.finish({"dies": str(tmp_path / "dies")}) is None
 

@@ -14,8 +14,9 @@ Started after the training instead, the paper study's 40-run SAC pack spent ~60 
 after training in a new evaluation process on one H200: 5 s of imports, 6.5 s restoring the
 policies with the process's first device work, 31 s tracing and compiling its one program, 16 s
 running the five scenes (results/speed/profile/final-evaluation-40-sac-runs-H200-2026-11-29.json).
-Where stdin speaks before the checkpoints are there (a training that failed early), nothing is
-compiled ahead."""
+Where stdin speaks before the checkpoints are there (a training that failed early) or before the
+compilation starts, nothing is compiled ahead; nor where compiling fails (said in one line): it is
+only a head start. The robustness suite's programs are not compiled ahead."""
 
 from __future__ import annotations
 
@@ -31,16 +32,26 @@ READ_TRIES = 5  # a checkpoint read that fails (the training's clean-up removed 
 def compile_ahead(args, folders: list[str], stream) -> dict:
   """{train.evaluate.runner_key: its runner (train.evaluate.slots_runner), compiled} for the groups
   train.evaluate._several will evaluate, once every folder has a checkpoint; {} where `stream`
-  (stdin) speaks first."""
-  from train.core.policy import act_from_params  # noqa: PLC0415
-  from train.core.run_record import read_run_record  # noqa: PLC0415
-  from train.evaluate import (_jobs, _took, network_key, pack_groups, recorded_config, runner_key,  # noqa: PLC0415
-                              slots_runner, stacked_params)
-  from train.evaluation import scene_programs  # noqa: PLC0415
-  if not _wait_for_checkpoints(folders, stream):
-    print("the runs to evaluate were named before every run had a checkpoint: nothing compiled ahead",
+  (stdin) speaks first, or where compiling ahead fails (the evaluation then compiles as without it)."""
+  if not _wait_for_checkpoints(folders, stream) or _readable(stream):
+    print("the runs to evaluate were named before their programs could compile: nothing compiled ahead",
           file=sys.stderr, flush=True)
     return {}
+  try:
+    return _compile_groups(args, folders)
+  except Exception as e:  # noqa: BLE001  (XLA, orbax and JAX raise many types; the evaluation goes on without it)
+    print(f"warning: compiling ahead failed ({type(e).__name__}: {str(e).strip()[:200]}); the evaluation "
+          "compiles after the training", file=sys.stderr, flush=True)
+    return {}
+
+
+def _compile_groups(args, folders: list[str]) -> dict:
+  """compile_ahead's runners, the runs' latest parameters standing in for their policies."""
+  from train.core.policy import act_from_params  # noqa: PLC0415
+  from train.core.run_record import read_run_record  # noqa: PLC0415
+  from train.evaluate import (_jobs, _took, network_key, pack_groups, pack_slots, recorded_config,  # noqa: PLC0415
+                              runner_key, slots_runner, stacked_params)
+  from train.evaluation import scene_programs  # noqa: PLC0415
   t0 = time.monotonic()
   records = [read_run_record(d) for d in folders]
   cfgs = [recorded_config(meta["config"], args.set) for meta in records]
@@ -53,12 +64,12 @@ def compile_ahead(args, folders: list[str], stream) -> dict:
   for g in pack_groups(cfgs, scenes, networks):
     if not scenes[g[0]]:
       continue
-    slots = [(i, b) for i in g for b in budgets[i]]  # one policy each, the latest parameters standing in
+    slots = pack_slots(g, budgets)  # one policy each, the latest parameters standing in
     run = slots_runner(args, scenes[g[0]], [cfgs[i] for i, _ in slots], act_from_params(loaded[g[0]][0]))
     params = stacked_params([loaded[i][1] for i, _ in slots])
     for _, draws in scene_programs(cfgs[g[0]], scenes[g[0]]):
       run.compile_for(params, next(iter(draws)))  # one scene of each program
-    compiled[runner_key([(folders[i], b) for i, b in slots], scenes[g[0]], networks[g[0]])] = run
+    compiled[runner_key(folders, slots, scenes[g[0]], networks[g[0]])] = run
   _took(f"compiled the evaluation of {len(folders)} runs ahead ({len(compiled)} group(s))", t0)
   return compiled
 
@@ -80,7 +91,7 @@ def _wait_for_checkpoints(folders: list[str], stream) -> bool:
   `stream` has something to read (or has closed) first."""
   said = False
   while not all(_has_parameters(d) for d in folders):
-    if _readable(stream):
+    if _readable(stream) is not False:
       return False
     if not said:
       print(f"waiting for the first checkpoints of {len(folders)} runs ...", file=sys.stderr, flush=True)
@@ -113,11 +124,12 @@ def _latest_params(folder: str):
   return read()
 
 
-def _readable(stream) -> bool:
-  """Whether reading `stream` would not wait (a line, or its end); a stream without a file
-  descriptor (e.g. a test's io.StringIO) always reads at once."""
+def _readable(stream) -> bool | None:
+  """Whether reading `stream` would not wait (a line, or its end); None for a stream without a file
+  descriptor (e.g. a test's io.StringIO), which never waits but has not been written to meanwhile:
+  the waiting for checkpoints ends at it, the compilation goes ahead."""
   try:
     fd = stream.fileno()
   except (AttributeError, OSError):  # io.UnsupportedOperation is an OSError
-    return True
+    return None
   return bool(select.select([fd], [], [], 0)[0])

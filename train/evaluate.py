@@ -191,7 +191,7 @@ def _evaluate_several(args, scenes: list[str], cfgs: list[TaskConfig], runs: lis
   of scene_programs; on the CPU one policy after another: vmapped_trials), every run's reports and
   trials its own; yields the summary lines. run: slots_runner's for these policies (runner_key's),
   built (and compiled) before, e.g. while the runs trained (train.eval_ahead)."""
-  slots = [(i, b) for i, bs in enumerate(budgets) for b in bs]  # one policy each
+  slots = pack_slots(list(range(len(runs))), budgets)  # one policy each
   t0 = time.monotonic()
   loaded = [_policy(runs[i][0], None, b) for i, b in slots]  # (make_act, params, step): one network (_several)
   _took(f"restored {len(slots)} policies", t0)
@@ -240,10 +240,15 @@ def _process_age() -> float | None:
     return None
 
 
-def runner_key(policies: list[tuple[str, int | None]], scenes: list[str], network: str) -> tuple:
-  """What a runner of _evaluate_several is built for: its policies ((run folder, budget) each, in
-  order), scenes and network (network_key): runners of equal keys are one."""
-  return tuple(policies), tuple(scenes), network
+def pack_slots(group: list[int], budgets: list[list[int | None]]) -> list[tuple[int, int | None]]:
+  """A group's policies: (run index, budget) of each budget of each of its runs, in order."""
+  return [(i, b) for i in group for b in budgets[i]]
+
+
+def runner_key(folders: list[str], slots: list[tuple[int, int | None]], scenes: list[str], network: str) -> tuple:
+  """What a runner of _evaluate_several is built for: its policies (pack_slots' of runs in folders,
+  as (folder, budget)), scenes and network (network_key): runners of equal keys are one."""
+  return tuple((folders[i], b) for i, b in slots), tuple(scenes), network
 
 
 def network_key(network: dict) -> str:
@@ -410,10 +415,10 @@ def _several(args):
                      "--baseline, --task, --out, --video and --checkpoint take one RUN_DIR")
   if args.await_runs and not args.run_dirs:
     raise ValueError("--await-runs needs the RUN_DIRs of the runs it waits for")
-  folders, ahead = list(dict.fromkeys(args.run_dirs)), {}
+  folders, compiled = list(dict.fromkeys(args.run_dirs)), {}
   if args.await_runs:
     from train.eval_ahead import compile_ahead, named_runs  # noqa: PLC0415
-    ahead = compile_ahead(args, folders, sys.stdin)
+    compiled = compile_ahead(args, folders, sys.stdin)
     folders = named_runs(sys.stdin, folders)
   runs = [(d, read_run_record(d)) for d in folders]
   cfgs = [recorded_config(meta["config"], args.set) for _, meta in runs]
@@ -421,9 +426,9 @@ def _several(args):
   networks = [_network(d) for d, _ in runs]
   for g in pack_groups(cfgs, [scenes for scenes, _, _ in jobs], networks):
     if jobs[g[0]][0]:
-      key = runner_key([(folders[i], b) for i in g for b in jobs[i][2]], jobs[g[0]][0], networks[g[0]])
+      key = runner_key(folders, pack_slots(g, [budgets for _, _, budgets in jobs]), jobs[g[0]][0], networks[g[0]])
       yield from _evaluate_several(args, jobs[g[0]][0], [cfgs[i] for i in g], [runs[i] for i in g],
-                                   [jobs[i][2] for i in g], ahead.get(key))
+                                   [jobs[i][2] for i in g], compiled.get(key))
   for (d, meta), cfg, (_, bases, budgets) in zip(runs, cfgs, jobs):
     if bases:
       yield from _evaluate_robustness(argparse.Namespace(**{**vars(args), "run_dir": d}), meta, bases, budgets, cfg)

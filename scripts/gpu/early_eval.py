@@ -58,7 +58,7 @@ def timed_pack(early: bool, steps: int, root: str) -> dict:
   return {"early": early, "rc": sorted({c["rc"] for c in res["cells"].values()}),
           "phases": sorted({c["phase"] for c in res["cells"].values()}),
           "training_process_s": round(marks["trained"] - t0, 1),
-          "after_training_s": round(marks["evaluated"] - marks["trained"], 1),
+          "after_training_s": round(marks["evaluated"] - marks["trained"], 1) if "evaluated" in marks else None,
           "pack_s": round(time.monotonic() - t0, 1), "evaluation_lines": timing}
 
 
@@ -67,15 +67,17 @@ def main(argv: list[str]) -> int:
   root = "/tmp/early-eval"
   shutil.rmtree(root, ignore_errors=True)  # a warm machine keeps /tmp: empty caches
   os.makedirs(root)
+  pack_args, _, eval_args = sac_pack()
   result = {"command": f"python scripts/gpu/early_eval.py OUT_JSON {steps}",
             "device": subprocess.run(["nvidia-smi", "--query-gpu=name", "--format=csv,noheader"],
                                      capture_output=True, text=True).stdout.strip(),
-            "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "pack_args": sac_pack()[0],
-            "eval_args": sac_pack()[2], "variants": []}
+            "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "pack_args": pack_args,
+            "eval_args": eval_args, "variants": []}
   for early in (False, True):
     result["variants"].append(timed_pack(early, steps, root))
     print(json.dumps(result["variants"][-1]), flush=True)
-    json.dump(result, open(out, "w"), indent=1)
+    with open(out, "w") as f:
+      json.dump(result, f, indent=1)
   return 0
 
 

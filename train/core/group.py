@@ -209,7 +209,8 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
     for db, plan in zip(dbs, plans):
       db.compiled(plan.run_id, 0, seconds)
     parts = [_member(t, p, dbs[i], (evaluations[i], probe and probe.member(i)), options,
-                     lambda summary, i=i: on_end(i, summary), tag) for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]
+                     lambda summary, i=i: on_end(i, summary), tag)
+             for i, (p, tag) in enumerate(zip(plans, run_tags(plans)))]
     return GroupLoop(update, t.learner.steps_per_update, [m for m, _ in parts], stop,
                      after_update).run(states, 0, plans[0].total_steps)
   finally:

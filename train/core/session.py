@@ -85,16 +85,17 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
   evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
   try:  # the evaluations trace once the update is lowered, and compile with it and while the run trains
     update, seconds = compile_update(t, meanwhile=lambda: ahead.start(options.compile_ahead, (evaluate, probe), state))
-  except BaseException:
+    db.compiled(plan.run_id, start_step, seconds)
+    primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
+    reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,
+                        os.path.join(plan.out_dir, "tb") if primary else None,
+                        stream=sys.stdout if primary else open(os.devnull, "w"),
+                        wall_offset=db.wall_offset(plan.run_id, start_step))
+    loop = Loop(update, t.learner.steps_per_update, checkpointer, reporter, stop, schedule_of(t, evaluate, probe))
+    return loop, reporter
+  except BaseException:  # no compilation thread left running at exit (train.core.ahead.settle)
     ahead.settle((evaluate, probe))
     raise
-  db.compiled(plan.run_id, start_step, seconds)
-  primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
-  reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,
-                      os.path.join(plan.out_dir, "tb") if primary else None,
-                      stream=sys.stdout if primary else open(os.devnull, "w"),
-                      wall_offset=db.wall_offset(plan.run_id, start_step))
-  return Loop(update, t.learner.steps_per_update, checkpointer, reporter, stop, schedule_of(t, evaluate, probe)), reporter
 
 
 def schedule_of(t: Training, evaluate, probe) -> Schedule:

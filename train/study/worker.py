@@ -237,16 +237,15 @@ def run_pack(pack_args: list[str], members: list[str], eval_args: list[str],
 def early_evaluation_here() -> bool:
   """Whether a pack's evaluation starts beside its training on this worker: where its JAX may use
   an accelerator (JAX_PLATFORMS is not `cpu`). On a CPU worker its compilation would take cores
-  from the training (a study's CPU slots run one-thread runs side by side)."""
+  from the training (a study's CPU slots run one-thread runs side by side): a CPU-only worker of
+  another cluster (train.study --scheduler) should set JAX_PLATFORMS=cpu, as the local one does."""
   return os.environ.get("JAX_PLATFORMS", "").strip().lower() != "cpu"
 
 
 class EarlyEvaluation:
   """A pack's evaluation started beside its training (`train.evaluate RUN ... --await-runs`,
   train.eval_ahead): it compiles its programs while the runs train, and evaluates the runs that
-  `finish` names once the training has ended. On the paper study's SAC pack (one H200) the
-  evaluation started after the training took ~60 s, of which ~45 s were its start-up and
-  compilation (results/speed/profile/final-evaluation-40-sac-runs-H200-2026-11-29.json)."""
+  `finish` names once the training has ended (what that saves: train.eval_ahead)."""
 
   def __init__(self, folders: list[str], eval_args: list[str], command: tuple[str, ...], db: str, scratch: str):
     self.log = os.path.join(scratch, "evaluate.log")  # _evaluate_together's too: one log of the pack's evaluation
@@ -270,7 +269,8 @@ class EarlyEvaluation:
       self.stop()
       return None
     rc = self.proc.wait()
-    output = open(self.log).read() if os.path.exists(self.log) else ""
+    with open(self.log) as f:
+      output = f.read()
     return {m: ("evaluate", rc, output) for m in ended}
 
   def stop(self) -> None:
