@@ -118,3 +118,20 @@ def chromium() -> str:
   path = shutil.which("chromium") or shutil.which("chromium-browser")
   assert path, CHROMIUM_MISSING
   return path
+
+
+def await_runs_on_stdin(mp, folders: list[str]) -> list[bool]:
+  """For `train.evaluate ... --await-runs` called in this process: sys.stdin names the folders (and
+  --await-runs's setting of the GPU's memory is undone with `mp`, a pytest MonkeyPatch); returns
+  the list each trace of an evaluation rollout appends to: whether stdin had been read by then."""
+  import io  # noqa: PLC0415
+  from train import evaluation  # noqa: PLC0415
+  stdin, traced, original = io.StringIO("".join(f"{f}\n" for f in folders)), [], evaluation.trial_rollout
+
+  def recording(*args, **kwargs):
+    core, rollout = original(*args, **kwargs)
+    return core, lambda *a, **k: (traced.append(stdin.tell() > 0), rollout(*a, **k))[1]
+  mp.setattr(evaluation, "trial_rollout", recording)
+  mp.setattr("sys.stdin", stdin)
+  mp.setenv("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
+  return traced

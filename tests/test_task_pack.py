@@ -8,7 +8,6 @@ configs that differ beyond the data a program takes are refused in one line befo
 written."""
 
 import dataclasses
-import io
 import json
 import os
 
@@ -17,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from helpers import PACK, TINY, TINY_SETTINGS, pack_plans
+from helpers import PACK, TINY, TINY_SETTINGS, await_runs_on_stdin, pack_plans
 from mjx_tracks.envs.config import load_config
 from mjx_tracks.envs.task_data import packing_conflict, task_data
 from mjx_tracks.envs.task_env import TrackedRobotEnv
@@ -140,15 +139,6 @@ def _the_memory_check_reports_what_xla_plans_for_the_programs_states(args, capsy
   assert script.main(["--tasks", f"{ASC},asc-hard", "--seeds", "0", *SAC_TINY]) == 2
 
 
-class _Stdin(io.StringIO):
-  """A stdin that notes whether it has been read."""
-  read_from = False
-
-  def __iter__(self):
-    self.read_from = True
-    return super().__iter__()
-
-
 def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
   """`train.evaluate RUN RUN ... --await-runs` (a study's pack, started beside its training): the
   four runs' suites in one program, the two tasks as data, compiled before stdin named the runs and
@@ -158,20 +148,12 @@ def _the_runs_evaluated_together_get_what_each_gets_alone(folders, capsys):
   from train import evaluate, evaluation
   from train.db import ExperimentDB, default_path
   from train.evaluation import report_path, suite_scenes
-  stdin, traced = _Stdin("".join(f"{f}\n" for f in folders)), []
-  original = evaluation.trial_rollout
-
-  def recording(*args, **kwargs):  # each trace of a rollout: whether stdin had named the runs by then
-    core, rollout = original(*args, **kwargs)
-    return core, lambda *a, **k: (traced.append(stdin.read_from), rollout(*a, **k))[1]
   # on the CPU one policy after another (vmapped_trials); here vmapped, as on a GPU, 3 policies a
   # call (EVAL_ENVS_PER_CALL: 9 environments): the second call the last run's, filled up with copies
   with pytest.MonkeyPatch.context() as mp:
     mp.setattr(evaluation, "vmapped_trials", lambda: True)
     mp.setattr(evaluation, "EVAL_ENVS_PER_CALL", 9)
-    mp.setattr(evaluation, "trial_rollout", recording)
-    mp.setattr("sys.stdin", stdin)
-    mp.setenv("XLA_PYTHON_CLIENT_PREALLOCATE", "false")  # what --await-runs sets, undone after this test
+    traced = await_runs_on_stdin(mp, folders)  # each rollout's trace: whether stdin had named the runs by then
     assert evaluate.main([*folders, "--suite", "--trials", "3", "--await-runs"]) == 0
   assert traced == [False]  # one program, traced (and compiled) ahead only
   said = capsys.readouterr().err

@@ -3,7 +3,6 @@ report, experiment database, bad input (SAC: test_training_sac.py)."""
 
 import datetime
 import glob
-import io
 import json
 import multiprocessing
 import os
@@ -17,7 +16,8 @@ import jax
 import numpy as np
 import pytest
 
-from helpers import HELD_OUT, TINY_SETTINGS, TRAIN_TINY, checkpoint_steps, run_id, start_training, wait_for
+from helpers import (HELD_OUT, TINY_SETTINGS, TRAIN_TINY, await_runs_on_stdin, checkpoint_steps, run_id,
+                     start_training, wait_for)
 from train import db as dbmod
 from train import evaluate, run
 from train.core.checkpoints import RunCheckpoints
@@ -254,16 +254,8 @@ def test_the_suite_evaluates_every_scene_at_every_milestone_with_its_own_policy(
   assert evaluate.main([run_dir, "--suite", "--milestones", "--trials", "2", "--db", database]) == 0
   # again, as a study's pack evaluates beside its training (--await-runs): the programs of the
   # milestone's policy and the final one traced before stdin names the run, never after
-  from train import evaluation
-  traced, original, stdin = [], evaluation.trial_rollout, io.StringIO(run_dir + "\n")
-
-  def recording(*args, **kwargs):
-    core, rollout = original(*args, **kwargs)
-    return core, lambda *a, **k: (traced.append(stdin.tell() > 0), rollout(*a, **k))[1]
   with pytest.MonkeyPatch.context() as mp:
-    mp.setattr(evaluation, "trial_rollout", recording)
-    mp.setattr("sys.stdin", stdin)
-    mp.setenv("XLA_PYTHON_CLIENT_PREALLOCATE", "false")  # what --await-runs sets, undone after
+    traced = await_runs_on_stdin(mp, [run_dir])
     assert evaluate.main([run_dir, "--scene", "hardest", "--milestones", "--trials", "2", "--db", database,
                           "--await-runs"]) == 0
   assert traced == [False]  # one program (one task), for both policies

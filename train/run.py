@@ -88,9 +88,9 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--keep-checkpoints", type=int, default=KEEP, metavar="K",
                  help=f"checkpoints kept (default {KEEP})")
   p.add_argument("--compile-ahead", choices=AHEAD_CHOICES, default=AHEAD_DEFAULT,
-                 help="compile the in-training evaluations' programs in threads of their own once the training "
-                      "step has compiled, while the run trains (auto: where JAX's backend is not the CPU; "
-                      "train.core.ahead)")
+                 help="compile the in-training evaluations' programs in threads of their own, started once "
+                      "the training step is lowered: they compile beside it and while the run trains (auto: "
+                      "where JAX's backend is not the CPU; train.core.ahead)")
   p.add_argument("--coordinator", metavar="HOST:PORT",
                  help="one process of a multi-process run (jax.distributed): process 0's address")
   p.add_argument("--num-processes", type=int, help="with --coordinator: how many processes")

@@ -16,15 +16,14 @@ import subprocess
 import sys
 import time
 
+from pack_args import study_pack  # scripts/gpu/pack_args.py, beside this script
 from train.study import worker
-from train.study.spec import cells, load_study, pack_folders, pack_train_args, packs_of
-
-STUDY = "paper-packed"
+from train.study.spec import pack_folders, pack_train_args
 
 
 def sac_pack():
-  spec = load_study(STUDY, ("baselines=[]",))
-  pack = next(p for p in packs_of([c for c in cells(spec) if not c.is_baseline]) if p[0].algo == "sac")
+  """(train.run arguments, run folders, train.evaluate arguments) of the paper study's SAC pack."""
+  spec, pack = study_pack("sac")
   return pack_train_args(pack), pack_folders(pack), pack[0].eval_args(spec.eval_trials)
 
 

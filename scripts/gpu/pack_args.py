@@ -10,9 +10,15 @@ import sys
 from train.study.spec import cells, load_study, pack_train_args, packs_of
 
 
+def study_pack(algo: str, study: str = "paper-packed"):
+  """(the study's spec, its first pack of ALGO's runs, or None)."""
+  spec = load_study(study, ("baselines=[]",))
+  return spec, next((p for p in packs_of([c for c in cells(spec) if not c.is_baseline]) if p[0].algo == algo), None)
+
+
 def pack_args(algo: str, study: str = "paper-packed") -> list[str] | None:
-  runs = [c for c in cells(load_study(study, ("baselines=[]",))) if not c.is_baseline]
-  return next((pack_train_args(p) for p in packs_of(runs) if p[0].algo == algo), None)
+  pack = study_pack(algo, study)[1]
+  return None if pack is None else pack_train_args(pack)
 
 
 def main(argv: list[str]) -> int:

@@ -27,6 +27,7 @@ from train.db import FINISHED, ExperimentDB
 TRAIN = ("-m", "train.run")
 EVALUATE = ("-m", "train.evaluate")
 RUN_DB = "run.sqlite"  # each run's records travel inside its folder
+EVALUATE_LOG = "evaluate.log"  # a pack's evaluation's output in its scratch folder, early or not (one log)
 
 
 def pack(folder: str) -> bytes:
@@ -248,7 +249,7 @@ class EarlyEvaluation:
   `finish` names once the training has ended (what that saves: train.eval_ahead)."""
 
   def __init__(self, folders: list[str], eval_args: list[str], command: tuple[str, ...], db: str, scratch: str):
-    self.log = os.path.join(scratch, "evaluate.log")  # _evaluate_together's too: one log of the pack's evaluation
+    self.log = os.path.join(scratch, EVALUATE_LOG)
     with open(self.log, "a") as out:
       self.proc = subprocess.Popen([sys.executable, *command, *folders, *eval_args, "--db", db, "--await-runs"],
                                    stdin=subprocess.PIPE, stdout=out, stderr=subprocess.STDOUT, text=True,
@@ -306,7 +307,7 @@ def _evaluate_together(folders: dict[str, str], eval_args: list[str], command: t
   runs that may share one), their trials recorded in the pack's database `db`; {member:
   ("evaluate", the process's exit code, its output)}. One process per run, side by side, took 500 s
   for a 40-run pack on one H200 (results/speed/group/paper-packed-2-H200-2026-11-28.md)."""
-  log = os.path.join(scratch, "evaluate.log")
+  log = os.path.join(scratch, EVALUATE_LOG)
   rc = _call([sys.executable, *command, *folders.values(), *eval_args, "--db", db], log)
   output = open(log).read() if os.path.exists(log) else ""
   return {m: ("evaluate", rc, output) for m in folders}
