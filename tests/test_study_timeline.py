@@ -28,7 +28,7 @@ def test_the_command_prints_one_line_per_program_and_refuses_a_missing_study(cap
   said = capsys.readouterr().out.splitlines()
   assert said[0] == ("study paper-packed: 1,033 s from its first start to its last end; 2 programs of 60 runs "
                      "(s from the first start; -: not recorded)")
-  # ... then its first run's clock at its last report: 728 s of training, 127 s besides (855 s)
+  # ... then its longest run's clock at its last report: 728 s of training, 127 s besides (855 s)
   assert said[2].split() == ["paper-sac/asc-inc-cog/20000/s0", "+39", "40", "gpu0", "0", "-", "982", "1,033", "728", "127"]
   assert study_main(["timeline", "nope", "--root", STUDIES]) == 2
   err = capsys.readouterr().err
@@ -42,6 +42,17 @@ def test_a_runs_clock_splits_into_training_and_the_rest():
   assert timeline.run_clock([]) is None and timeline.run_clock([(1000, 50.0, None)]) is None
   sac = timeline.programs(os.path.join(STUDIES, "paper-packed"))[0]
   assert abs(sum(sac.clock) - 855) < 1  # "the SAC pack's clock read 855 s at its last step" (docs/benchmarks.md)
+
+
+def test_a_programs_clock_is_its_longest_runs_not_a_run_stopped_early():
+  """A pack whose first run stopped at 1,000 steps (as the paper study's early-stopped SAC runs do):
+  the clock shown is that of the run that trained to the end."""
+  members = [(f"c{i}", 1, {"started": 0.0, "ended": 800.0}) for i in range(3)]
+  runs = {("c0", 1): "early", ("c1", 1): "whole", ("c2", 1): "also-whole"}
+  reports = {"early": [(1000, 44.0, 25.0)], "whole": [(1000, 44.0, 25.0), (20000, 752.0, 40.0)],
+             "also-whole": [(1000, 44.0, 25.0), (20000, 752.0, 38.0)]}
+  prog = timeline._program(members, runs, {}, reports)
+  assert prog.clock == timeline.run_clock(reports["whole"]) and prog.clock[0] > 500
 
 
 def test_a_study_without_its_database_yet_shows_when_its_programs_started(tmp_path):

@@ -2,10 +2,10 @@
 its folder (state.json: which runs trained together in one program) and its database (each attempt's
 run; each run's `compiled` and end-of-training events): per program its runs, its worker, and the
 seconds from the study's first start to the program's start, to its training step compiled, to its
-training ended (its last run's) and to its attempt ended (evaluations included); then where its first
-run's clock went (its training reports): seconds of training (the steps between two reports over
-their steps/s, which leave evaluations and checkpoints out) and seconds besides (paused), which add
-up to its clock at its last report."""
+training ended (its last run's) and to its attempt ended (evaluations included); then where its
+longest run's clock went (its training reports; a run stopped early says little): seconds of
+training (the steps between two reports over their steps/s, which leave evaluations and checkpoints
+out) and seconds besides (paused), which add up to its clock at its last report."""
 
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ class Program:
   trained: float | None
   ended: float | None
   stopped: bool = False
-  # its first run's (training s, paused s): run_clock (a resumed run's: its whole clock)
+  # its longest run's (training s, paused s): run_clock (a resumed run's: its whole clock)
   clock: tuple[float, float] | None = None
 
 
@@ -92,10 +92,12 @@ def _program(members: list[tuple[str, int, dict]], runs: dict, events: dict, rep
           if t >= int(start) and (end is None or t <= end + 1)]
   compiled = [t for e, t in mine if e == "compiled"]
   trained = [t for e, t in mine if e in TRAINING_ENDS]
-  first = runs.get(members[0][:2])
+  # the run whose last report came latest (the first of those in a tie): the program's whole training
+  walls = [reports.get(runs.get((cid, n)), [(0, 0.0, None)])[-1][1] for cid, n, _ in members]
+  longest = runs.get(members[walls.index(max(walls))][:2])
   return Program(tuple(cid for cid, _, _ in members), attempts[0].get("worker"), start,
                  min(compiled) if compiled else None, max(trained) if trained else None, end,
-                 any(a.get("stopped") for a in attempts), run_clock(reports.get(first, [])))
+                 any(a.get("stopped") for a in attempts), run_clock(reports.get(longest, [])))
 
 
 def programs(folder: str) -> list[Program]:
@@ -110,7 +112,7 @@ def programs(folder: str) -> list[Program]:
 
 def lines(name: str, progs: list[Program]) -> list[str]:
   """What `timeline` prints: the study's span, then one line per program (s since its first start;
-  then its first run's clock: training s, paused s)."""
+  then its longest run's clock: training s, paused s)."""
   if not progs:
     return [f"study {name}: no attempt has started"]
   t0 = min(p.started for p in progs)
