@@ -11,7 +11,9 @@ compilations of its compilation log, the evaluation's wall s; with the device, c
 Usage (GPU host): python scripts/gpu/compile_flags.py OUT [--task asc-inc-cog] [--steps 600000]
     [--algo ppo] [--preset P] [--hp KEY=VALUE ...] [--variants NAME,...] [--skip-eval] [--train-args '...']
 E.g. the paper's one-robot SAC, launch-bound (~16 ms a training step): --algo sac --preset paper --steps 5000
---hp num_evals=1 --hp max_replay_size=20000 --hp training_metrics_steps=500 --skip-eval."""
+--hp num_evals=1 --hp max_replay_size=20000 --hp training_metrics_steps=500 --skip-eval.
+--code DIR runs both commands from another checkout (e.g. an earlier commit's `git archive` unpacked):
+a before / after pair in one device call, each its own invocation (OUT/before, OUT/after)."""
 
 from __future__ import annotations
 
@@ -63,14 +65,14 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
          *(["--preset", args.preset] if args.preset else []), *(x for h in args.hp for x in ("--hp", h)),
          *shlex.split(args.train_args)]
   t0 = time.time()
-  proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+  proc = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=args.code)
   out = proc.stdout + (f"\n[stderr] {proc.stderr[-400:]}" if proc.returncode else "")  # why a variant failed
   wall = time.time() - t0
   made = os.path.isfile(database)  # not where the run failed before it started its records
   if args.skip_eval:
     ev, eval_wall, success = None, None, None
   else:
-    ev, eval_wall, success = _evaluate(run, env, work, name)
+    ev, eval_wall, success = _evaluate(run, env, work, name, args.code)
   return {"xla_flags": flags, "compile_s": runs.compile_seconds(database) if made else None,
           "train_steps_per_s": runs.steady_rate(runs.training_rates(database)) if made else None,
           "run_wall_s": round(wall, 1),
@@ -78,11 +80,11 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
           "longest_compilations": longest_compilations(env["MJX_TRACKS_COMPILE_LOG"]), "log_tail": out[-600:]}
 
 
-def _evaluate(run: str, env: dict, work: str, name: str):
+def _evaluate(run: str, env: dict, work: str, name: str, code: str | None):
   """(the process, its wall s, hardest-staircase success or None) of evaluating the variant's run."""
   t0 = time.time()
   ev = subprocess.run([sys.executable, "-m", "train.evaluate", run, "--scene", "hardest", "--trials", "100",
-                       "--out", f"{work}/{name}-eval.json"], env=env, capture_output=True, text=True)
+                       "--out", f"{work}/{name}-eval.json"], env=env, capture_output=True, text=True, cwd=code)
   eval_wall = round(time.time() - t0, 1)
   success = json.load(open(f"{work}/{name}-eval.json"))["metrics"]["success"]["mean"] if ev.returncode == 0 else None
   return ev, eval_wall, success
@@ -101,6 +103,8 @@ def main() -> None:
   p.add_argument("--train-args", default="", help="more train.run arguments for every variant, one string "
                  "(e.g. '--compile-ahead off')")
   p.add_argument("--skip-eval", action="store_true", help="no evaluation after each run (compile and training only)")
+  p.add_argument("--code", default=None, metavar="DIR", help="run train.run and train.evaluate from this checkout "
+                 "(its code: `python -m` finds it first), not this one's")
   args = p.parse_args()
   args.hp = args.hp or ["training_metrics_steps=81920"]  # a [train] line (steps/s) every PPO update
   import jax  # noqa: PLC0415
@@ -112,6 +116,7 @@ def main() -> None:
       print(name, {k: v for k, v in results[name].items() if k not in ("log_tail", "longest_compilations")}, flush=True)
       os.makedirs(args.out, exist_ok=True)
       json.dump({"device": device, "command": "python scripts/gpu/compile_flags.py " + shlex.join(sys.argv[1:]),
+                 "code": args.code or "this checkout",
                  "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                  "variants": results}, open(f"{args.out}/compile-flags.json", "w"), indent=1)
 
