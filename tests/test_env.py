@@ -51,15 +51,6 @@ def _compiled(task: str):
   return core, env, lambda keys: reset_with(keys, env.initial_stats()), jax.jit(env.step), TASK_ENVS.get(task, N_ENVS)
 
 
-@functools.lru_cache(maxsize=None)
-def _sensing(core):
-  """A jitted function (batched state, qpos) -> the state with that qpos, sensed again: a state's data
-  is always sensed (EnvState), and the step's physics starts from its poses."""
-  def one(es, q):
-    return es.replace(data=core._sense(core._model(es.scene, es.robust), es.data.replace(qpos=q)))  # noqa: SLF001
-  return jax.jit(lambda state, q: state.replace(pipeline_state=jax.vmap(one)(state.pipeline_state, q)))
-
-
 def _flat(d: dict, prefix: str = "") -> dict:
   out = {}
   for k, v in d.items():
@@ -104,16 +95,16 @@ def test_task_jits_reset_and_ten_steps_with_finite_observations(task):
   assert float(np.asarray(s.metrics["physics_nan"]).sum()) == 0.0
 
 
-def _upside_down(core, state):
+def _upside_down(state):
   es = state.pipeline_state
   q = es.data.qpos.at[:, 3:7].set(jnp.array([0.0, 1.0, 0.0, 0.0]))  # rolled by pi
   q = q.at[:, 2].set(0.4)
-  return _sensing(core)(state, q)
+  return state.replace(pipeline_state=es.replace(data=es.data.replace(qpos=q)))
 
 
 def test_tip_over_terminates_with_penalty():
   core, _, reset, step, n = _compiled("asc-inc-cog")
-  s = _upside_down(core, reset(jax.random.split(jax.random.PRNGKey(0), n)))
+  s = _upside_down(reset(jax.random.split(jax.random.PRNGKey(0), n)))
   s = step(s, jnp.zeros((n, core.action_size)))
   assert np.asarray(s.done).all()
   assert not np.asarray(s.info["truncation"]).any()
@@ -135,7 +126,7 @@ def test_finished_episodes_restart_on_a_new_scene():
   core, _, reset, step, n = _compiled("nav")  # a run task (compiled once) whose uniform sampler redraws at any eps
   s = reset(jax.random.split(jax.random.PRNGKey(0), n))
   before = np.asarray(s.pipeline_state.scene.xi)
-  s = _upside_down(core, s)
+  s = _upside_down(s)
   s = step(s, jnp.zeros((n, core.action_size)))
   after = np.asarray(s.pipeline_state.scene.xi)
   assert not np.allclose(before, after)
@@ -152,7 +143,7 @@ def test_unfinished_environments_are_untouched_by_the_auto_reset():
   core, env, reset, step, n = _compiled("nav")
   s = reset(jax.random.split(jax.random.PRNGKey(2), n))
   keep = lambda a, b: jnp.concatenate([a[:1], b[1:]])  # env 0 tipped, env 1 as it was
-  mixed = s.replace(pipeline_state=jax.tree_util.tree_map(keep, _upside_down(core, s).pipeline_state, s.pipeline_state))
+  mixed = s.replace(pipeline_state=jax.tree_util.tree_map(keep, _upside_down(s).pipeline_state, s.pipeline_state))
   action = jnp.full((n, core.action_size), 0.3, jnp.float32)  # not weakly typed: no new trace
   after, reference = step(mixed, action), step(s, action)
   assert np.asarray(after.done).tolist() == [1.0, 0.0] and not np.asarray(reference.done).any()
@@ -188,7 +179,7 @@ def test_navigation_ends_at_the_goal_and_when_moving_away():
   es = s.pipeline_state
   goal = np.asarray(es.scene.goal)
   q = es.data.qpos.at[0, :2].set(goal[0, :2])
-  es = _sensing(core)(s, q).pipeline_state.replace(d0=es.d0.at[1].set(0.5), closest=es.closest.at[1].set(0.5))
+  es = es.replace(data=es.data.replace(qpos=q), d0=es.d0.at[1].set(0.5), closest=es.closest.at[1].set(0.5))
   s = step(s.replace(pipeline_state=es), jnp.zeros((n, core.action_size)))
   assert np.asarray(s.done).tolist() == [1.0, 1.0]
   assert np.asarray(s.metrics["goal_reached"]).tolist() == [1.0, 0.0]
@@ -212,7 +203,7 @@ def test_navigation_measures_the_free_space_path_and_a_collision_ends_the_episod
   face_y = box_pos[1] - box_size[1]  # the obstacle juts from the left wall: its face toward -y
   q = es.data.qpos.at[0, :3].set(jnp.array([box_pos[0], face_y - 0.405 + 0.1, es.data.qpos[0, 2]]))
   q = q.at[0, 3:7].set(jnp.array([1.0, 0.0, 0.0, 0.0]))  # heading +x, the left flippers toward the face
-  s = step(_sensing(core)(s, q), jnp.zeros((n, core.action_size)))
+  s = step(s.replace(pipeline_state=es.replace(data=es.data.replace(qpos=q))), jnp.zeros((n, core.action_size)))
   assert np.asarray(s.metrics["collision"]).tolist() == [1.0, 0.0]
   assert np.asarray(s.done).tolist() == [1.0, 0.0]
   np.testing.assert_allclose(np.asarray(s.metrics["reward/collision"]), [-cfg.reward.collision_penalty, 0.0])

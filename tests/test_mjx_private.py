@@ -8,7 +8,6 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 import pytest
-from jax.extend.core import jaxprs_in_params
 from mujoco import mjx
 
 from mjx_tracks.robots import get_robot
@@ -98,45 +97,3 @@ def test_solve_equals_mjx_solver_alone_and_batched(jaguar_stairs, solver_inputs)
   for a, b in zip(ours + ours_one, theirs + theirs_one):
     np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
   assert float(np.abs(np.asarray(ours[2])).max()) > 0  # the robots stand on contacts
-
-
-def test_a_sensed_loop_gives_the_loop_then_its_kinematics(jaguar_stairs, reference):
-  """step_sensed from sensed data, each substep ended by `kinematics` (Simulator's sensed loop):
-  the reference's motion, and poses and centres of mass those of its last qpos. Not bit for bit:
-  XLA fuses the kinematics with other stages than before (float32 rounding, ~1e-7 here)."""
-  m = jaguar_stairs.model
-  noop = lambda m, d: mjx_private.kinematics(m, mjx_private.step_sensed(
-      m, d, lambda m, d: (d, None), lambda m, d, _: jnp.zeros(mjx_private.efc_rows(d))))
-  start = jax.jit(lambda d: mjx_private.kinematics(m, d))(_resting(jaguar_stairs))
-  ours = _run(noop, m, start)
-  sensed = jax.jit(lambda d: mjx_private.kinematics(m, d))(reference)
-  assert float(np.abs(np.asarray(sensed.xpos) - np.asarray(reference.xpos)).max()) > 1e-4  # stale before
-  for field in ("qpos", "qvel", "xpos", "xquat", "subtree_com", "geom_xpos"):
-    np.testing.assert_allclose(np.asarray(getattr(ours, field)), np.asarray(getattr(sensed, field)),
-                               rtol=1e-5, atol=1e-5, err_msg=field)
-
-
-def test_the_envs_step_holds_mjxs_kinematics_once():
-  """The env's control step runs its substeps from sensed data and leaves it sensed: MJX's
-  kinematics appears once in its program (in the substep loop), not again after it; the auto-reset's
-  new episodes add their own."""
-  import mjx_tracks
-  from mjx_tracks.envs.wrappers import batched_env
-  env = mjx_tracks.load("asc-inc-cog")
-  state = jax.eval_shape(env.reset, jax.random.PRNGKey(0))
-  action = jax.ShapeDtypeStruct((env.action_size,), jnp.float32)
-  assert _calls(jax.make_jaxpr(env.step)(state, action).jaxpr, "kinematics") == 1
-  batched = batched_env(env)
-  states = jax.eval_shape(batched.reset, jax.random.split(jax.random.PRNGKey(0), 2))
-  actions = jax.ShapeDtypeStruct((2, env.action_size), jnp.float32)
-  assert _calls(jax.make_jaxpr(batched.step)(states, actions).jaxpr, "kinematics") == 2
-
-
-def _calls(jaxpr, name: str) -> int:
-  """How many calls of the jitted function `name` a jaxpr holds, nested ones included."""
-  n = 0
-  for eqn in jaxpr.eqns:
-    n += eqn.primitive.name in ("pjit", "jit") and eqn.params.get("name") == name
-    for sub in jaxprs_in_params(eqn.params):
-      n += _calls(sub, name)
-  return n

@@ -45,8 +45,6 @@ from scenes.terrain import TerrainScene
 class EnvState:
   """Everything one environment carries between control steps."""
 
-  # its poses, orientations and centres of mass are those of its qpos (_sense): the step's physics
-  # starts from them (Simulator.advance_watching, sensed); code that edits qpos senses it again
   data: mjx.Data
   scene: SceneState
   targets: jax.Array  # (n_joints,) rad, joint servo targets
@@ -138,6 +136,7 @@ class TrackedRobotEnv(Env):
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
     v, w, filtered = self._safe_command(m, es, v, w)
     data, collided, robust, belts = self._advance(m, es, self.controller.belt_speeds(v, w), targets)
+    data = self._sense(m, data)
     # a physics blow-up ends the episode and keeps the last finite state
     finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
     data = jax.tree_util.tree_map(lambda a, b: jnp.where(finite, a, b), data, es.data)
@@ -228,9 +227,10 @@ class TrackedRobotEnv(Env):
       if "push" in self.acting:
         data = data.replace(qvel=rnd.push(data.qvel, p, k_push)[0])
       robust = robust.replace(belts=belts)
-    # es.data is sensed (reset_at and step leave it so), and the result is too
-    watch = self.watch if self.watch.active else None
-    data, collided = self.sim.advance_watching(m, data, belts, targets, n, watch, sensed=True, **late)
+    if self.watch.active:
+      data, collided = self.sim.advance_watching(m, data, belts, targets, n, self.watch, **late)
+    else:
+      data, collided = self.sim.advance(m, data, belts, targets, n, **late), jnp.bool_(False)
     return data, collided, robust, ran
 
   def _safe_command(self, m: mjx.Model, es: EnvState, v: jax.Array, w: jax.Array):

@@ -44,15 +44,8 @@ def check_model(m: mujoco.MjModel) -> None:
 def step(m: mjx.Model, d: mjx.Data, on_contacts: ContactHook, aref_shift: ArefHook) -> mjx.Data:
   """mjx.step's stages; on_contacts edits the contacts after collision and returns auxiliary data,
   aref_shift(m, d, aux) is added to the constraint rows' reference acceleration before solving."""
-  return step_sensed(m, kinematics(m, d), on_contacts, aref_shift)
-
-
-def step_sensed(m: mjx.Model, d: mjx.Data, on_contacts: ContactHook, aref_shift: ArefHook) -> mjx.Data:
-  """`step` of data whose poses and centres of mass are already those of its qpos (`kinematics`,
-  mjx.step's first two stages): its other stages. A loop of substeps that ends each with
-  `kinematics` holds that stage once in its program and leaves its data sensed."""
-  for stage in (smooth.camlight, smooth.tendon, smooth.crb, smooth.tendon_armature, smooth.factor_m,
-                collision_driver.collision):
+  for stage in (smooth.kinematics, smooth.com_pos, smooth.camlight, smooth.tendon, smooth.crb,
+                smooth.tendon_armature, smooth.factor_m, collision_driver.collision):
     d = stage(m, d)
   d, aux = on_contacts(m, d)
   d = constraint.make_constraint(m, d)
@@ -134,6 +127,6 @@ def contact_damping(m: mjx.Model, solref: jax.Array, solimp: jax.Array, pos: jax
 
 @jax.jit
 def kinematics(m: mjx.Model, d: mjx.Data) -> mjx.Data:
-  """Body / geom / site poses and centres of mass consistent with qpos: mjx.step's first two stages
-  (jitted: traced once per model and process, as simulator.step_with_tracks)."""
+  """Body / geom / site poses and centres of mass consistent with qpos (jitted: traced once per
+  model and process, as simulator.step_with_tracks)."""
   return smooth.com_pos(m, smooth.kinematics(m, d))

@@ -25,17 +25,13 @@ SPAWN_CLEARANCE = 0.005  # m, the chassis spawns this far above resting height, 
 # jitted at module level, tm static (hashed by value): a process traces each model's substep once and
 # every later program of that model reuses it (a tenth of the trace; XLA inlines the call, so the
 # compiled program is the same); tests/test_trace_cache.py
-@functools.partial(jax.jit, static_argnums=(2, 5))
+@functools.partial(jax.jit, static_argnums=2)
 def step_with_tracks(m: mjx.Model, d: mjx.Data, tm: TrackModel, belt_speeds: jax.Array,
-                     mu_scale: jax.Array | None = None, sensed: bool = False) -> mjx.Data:
+                     mu_scale: jax.Array | None = None) -> mjx.Data:
   """One physics substep: mjx.step with the belt contacts of the track model (its belt friction
-  (along, across) times mu_scale where given); sensed: d's poses are already those of its qpos
-  (mjx_private.step_sensed), and the result's are made so at the end (mjx_private.kinematics)."""
-  on_contacts = lambda m, d: apply_belt_contacts(m, d, tm, belt_speeds, mu_scale)  # noqa: E731
-  shift = lambda m, d, slip: aref_shift(m, d, tm, slip)  # noqa: E731
-  if not sensed:
-    return mjx_private.step(m, d, on_contacts, shift)
-  return mjx_private.kinematics(m, mjx_private.step_sensed(m, d, on_contacts, shift))
+  (along, across) times mu_scale where given)."""
+  return mjx_private.step(m, d, lambda m, d: apply_belt_contacts(m, d, tm, belt_speeds, mu_scale),
+                          lambda m, d, slip: aref_shift(m, d, tm, slip))
 
 
 def runs_late_command(substep, delay) -> jax.Array:
@@ -115,10 +111,9 @@ class Simulator:
     return d.replace(qpos=qpos)
 
   def substep(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array,
-              mu_scale: jax.Array | None = None, sensed: bool = False) -> mjx.Data:
-    """One physics step of timestep seconds with the given belt speeds (m/s, order of BELTS);
-    sensed: as step_with_tracks."""
-    return step_with_tracks(m, d, self.tracks, belt_speeds, mu_scale, sensed)
+              mu_scale: jax.Array | None = None) -> mjx.Data:
+    """One physics step of timestep seconds with the given belt speeds (m/s, order of BELTS)."""
+    return step_with_tracks(m, d, self.tracks, belt_speeds, mu_scale)
 
   def advance(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, joint_targets: jax.Array,
               n_substeps, **late) -> mjx.Data:
@@ -126,20 +121,15 @@ class Simulator:
     return self._run(m, d, belt_speeds, joint_targets, n_substeps, None, **late)[0]
 
   def advance_watching(self, m: mjx.Model, d: mjx.Data, belt_speeds: jax.Array, joint_targets: jax.Array,
-                       n_substeps, watch: CollisionWatch | None, **late) -> tuple[mjx.Data, jax.Array]:
-    """advance(), and whether any of its substeps' contacts was a collision (watch.touching; None:
-    none watched, False)."""
+                       n_substeps, watch: CollisionWatch, **late) -> tuple[mjx.Data, jax.Array]:
+    """advance(), and whether any of its substeps' contacts was a collision (watch.touching)."""
     return self._run(m, d, belt_speeds, joint_targets, n_substeps, watch, **late)
 
   def _run(self, m, d, belts, targets, n_substeps, watch: CollisionWatch | None, mu_scale: jax.Array | None = None,
-           held: tuple[jax.Array, jax.Array] | None = None, delay=0, sensed: bool = False) -> tuple[mjx.Data, jax.Array]:
+           held: tuple[jax.Array, jax.Array] | None = None, delay=0) -> tuple[mjx.Data, jax.Array]:
     """n_substeps (an int, or traced: a jittered period) physics steps with the command (belt speeds
     m/s, joint targets rad); held: the previous command's (belt speeds, joint targets), which act
-    for the first `delay` substeps (a late command); mu_scale: (2,) x the belts' friction (along, across);
-    sensed: d's poses, orientations and centres of mass are those of its qpos (mjx_private.kinematics)
-    and the result's are made so too, each substep's kinematics run at its end, not at the next
-    one's start: the figures of a run without it followed by mjx_private.kinematics, with that stage
-    once in the program instead of twice, and once a period fewer at run time."""
+    for the first `delay` substeps (a late command); mu_scale: (2,) x the belts' friction (along, across)."""
     def substep(i, carry):
       x, hit = carry
       b = belts
@@ -147,7 +137,7 @@ class Simulator:
         late = runs_late_command(i, delay)
         b = jnp.where(late, held[0], belts)
         x = x.replace(ctrl=jnp.where(late, held[1], targets))
-      x = self.substep(m, x, b, mu_scale, sensed)
+      x = self.substep(m, x, b, mu_scale)
       return x, (hit | watch.touching(x)) if watch is not None else hit
     return jax.lax.fori_loop(0, n_substeps, substep, (d.replace(ctrl=targets), jnp.bool_(False)))
 
