@@ -70,6 +70,27 @@ def test_the_database_holds_the_compile_time_and_training_rates_the_command_prin
     runs.training_rates(database + ".missing")
 
 
+def test_a_restore_target_is_the_new_networks_shapes_with_no_program_compiled():
+  """NetworkSpec.policy_params_target, which restores fill: the structure, shapes and dtypes of a new
+  network's parameters, with no program compiled (an eager network init compiled ~80 small programs
+  in each process that restored a policy: ~2.5 s of each `train.evaluate`, 2026-11-29)."""
+  from jax import monitoring
+  from train.core.networks import NetworkSpec
+  compiled, watching = [], [True]
+  monitoring.register_event_duration_secs_listener(
+      lambda name, secs, **kw: compiled.append(name) if watching[0] and name.endswith("backend_compile_duration") else None)
+  try:
+    spec = NetworkSpec("ppo", 13, 3, (5,), (7,))  # shapes no other test compiles
+    target = spec.policy_params_target()
+  finally:
+    watching[0] = False  # a listener stays registered (JAX's public API removes none)
+  assert not compiled
+  real = spec.init_policy_params()
+  assert jax.tree_util.tree_structure(target) == jax.tree_util.tree_structure(real)
+  assert [(t.shape, t.dtype) for t in jax.tree_util.tree_leaves(target)] == \
+      [(np.shape(r), jax.numpy.asarray(r).dtype) for r in jax.tree_util.tree_leaves(real)]  # a float: its dtype in JAX
+
+
 def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
   from flax import serialization
   from train.core.networks import NetworkSpec
@@ -78,7 +99,7 @@ def test_export_load_act_reproduces_the_checkpointed_policy(ppo_run):
   out, _ = ppo_run
   raw, meta = RunCheckpoints(out).restore()
   spec = NetworkSpec.from_json(meta["network"])
-  params = serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
+  params = serialization.from_state_dict(spec.policy_params_target(), {"0": raw["0"], "1": raw["1"]})
   reference = spec.make_inference_fn()(params, deterministic=True)
   act = load_policy(os.path.join(out, "policy"))
   env = mjx_tracks.load("asc-inc-cog", TINY_SETTINGS)

@@ -199,7 +199,7 @@ def unreadable_warning(folder: str, steps: list[int], i: int, error: Exception) 
 
 def policy_params(raw: dict, spec: NetworkSpec):
   """(normalizer, policy) parameters from a checkpoint's raw `params` state dict."""
-  return serialization.from_state_dict(spec.init_policy_params(), {"0": raw["0"], "1": raw["1"]})
+  return serialization.from_state_dict(spec.policy_params_target(), {"0": raw["0"], "1": raw["1"]})
 
 
 def export_policy(out_dir: str, normalizer, policy, spec: NetworkSpec, info: dict[str, Any],

@@ -48,10 +48,16 @@ class NetworkSpec:
     return self.factory()(self.observation_size, self.action_size, preprocess_observations_fn=preprocess)
 
   def init_policy_params(self):
-    """(normalizer, policy) parameters with the right structure (targets for restoring)."""
+    """(normalizer, policy) parameters as a new network has them (computed: each of their small
+    operations compiled on first use in a process, ~1.5 s on a CPU)."""
     nets = self.build()
     normalizer = running_statistics.init_state(specs.Array((self.observation_size,), jax.numpy.float32))
     return normalizer, nets.policy_network.init(jax.random.PRNGKey(0))
+
+  def policy_params_target(self):
+    """The structure, shapes and dtypes of init_policy_params (jax.ShapeDtypeStruct leaves), nothing
+    computed or compiled: the target a restore fills (flax.serialization.from_state_dict)."""
+    return jax.eval_shape(self.init_policy_params)
 
   def make_inference_fn(self):
     nets = self.build()

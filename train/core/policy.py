@@ -41,7 +41,7 @@ def load_policy_params(path: str):
     raw = ocp.StandardCheckpointer().restore(os.path.join(os.path.abspath(path), "params"))
   except Exception as e:  # orbax raises several types for missing / corrupt files
     raise ValueError(f"cannot read policy parameters in {path}: {e}") from e
-  return spec, serialization.from_state_dict(spec.init_policy_params(), raw)
+  return spec, serialization.from_state_dict(spec.policy_params_target(), raw)
 
 
 def act_from_params(spec: NetworkSpec, deterministic: bool = True):

@@ -71,7 +71,7 @@ def policy_params(algo: str, model, spec: NetworkSpec):
   """(normalizer, policy) parameters of the model's deterministic policy, in the spec's structure."""
   normalizer = running_statistics.init_state(specs.Array((spec.observation_size,), jnp.float32))
   policy = _ppo_actor(model) if algo == "ppo" else _tanh_actor(algo, model, spec)
-  target = spec.init_policy_params()[1]
+  target = spec.policy_params_target()[1]
   if jax.tree_util.tree_structure(policy) != jax.tree_util.tree_structure(target):
     raise ValueError(f"the SB3 {algo} policy does not map onto the spec's network: {jax.tree_util.tree_structure(policy)}")
   return normalizer, jax.tree_util.tree_map(lambda x, t: jnp.asarray(x, t.dtype).reshape(t.shape), policy, target)
