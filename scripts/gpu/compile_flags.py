@@ -106,6 +106,8 @@ def main() -> None:
   p.add_argument("--code", default=None, metavar="DIR", help="run train.run and train.evaluate from this checkout "
                  "(its code: `python -m` finds it first), not this one's")
   args = p.parse_args()
+  if args.code and not os.path.isfile(os.path.join(args.code, "train", "run.py")):
+    p.error(f"--code {args.code}: no train/run.py there (python -m would run this checkout's code instead)")
   args.hp = args.hp or ["training_metrics_steps=81920"]  # a [train] line (steps/s) every PPO update
   import jax  # noqa: PLC0415
   device = f"{jax.devices()[0].device_kind} x {jax.device_count()}, JAX {jax.__version__}"

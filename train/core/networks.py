@@ -49,7 +49,7 @@ class NetworkSpec:
 
   def init_policy_params(self):
     """(normalizer, policy) parameters as a new network has them (computed: each of their small
-    operations compiled on first use in a process, ~1.5 s on a CPU)."""
+    operations compiled on its first use in a process, ~1.5 s the first time on a 2-core CPU)."""
     nets = self.build()
     normalizer = running_statistics.init_state(specs.Array((self.observation_size,), jax.numpy.float32))
     return normalizer, nets.policy_network.init(jax.random.PRNGKey(0))

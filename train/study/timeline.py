@@ -3,9 +3,9 @@ its folder (state.json: which runs trained together in one program) and its data
 run; each run's `compiled` and end-of-training events): per program its runs, its worker, and the
 seconds from the study's first start to the program's start, to its training step compiled, to its
 training ended (its last run's) and to its attempt ended (evaluations included); then where its
-longest run's clock went (its training reports; a run stopped early says little): seconds of
-training (the steps between two reports over their steps/s, which leave evaluations and checkpoints
-out) and seconds besides (paused), which add up to its clock at its last report."""
+longest run's clock went (its first run to report the most steps; one stopped early says little):
+seconds of training (the steps between two reports over their steps/s, which leave evaluations and
+checkpoints out) and seconds besides (paused), which add up to its clock at its last report."""
 
 from __future__ import annotations
 
@@ -92,9 +92,10 @@ def _program(members: list[tuple[str, int, dict]], runs: dict, events: dict, rep
           if t >= int(start) and (end is None or t <= end + 1)]
   compiled = [t for e, t in mine if e == "compiled"]
   trained = [t for e, t in mine if e in TRAINING_ENDS]
-  # the run whose last report came latest (the first of those in a tie): the program's whole training
-  walls = [reports.get(runs.get((cid, n)), [(0, 0.0, None)])[-1][1] for cid, n, _ in members]
-  longest = runs.get(members[walls.index(max(walls))][:2])
+  # the first of the runs whose last report is at the most steps: the program's whole training (the
+  # reports of runs that end together differ by their logging order, so their wall times do not choose)
+  last_steps = [reports.get(runs.get((cid, n)), [(0, 0.0, None)])[-1][0] for cid, n, _ in members]
+  longest = runs.get(members[last_steps.index(max(last_steps))][:2])
   return Program(tuple(cid for cid, _, _ in members), attempts[0].get("worker"), start,
                  min(compiled) if compiled else None, max(trained) if trained else None, end,
                  any(a.get("stopped") for a in attempts), run_clock(reports.get(longest, [])))
