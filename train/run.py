@@ -29,6 +29,7 @@ import sys
 
 from mjx_tracks.envs.config import ConfigError
 from train.core.ahead import CHOICES as AHEAD_CHOICES, DEFAULT as AHEAD_DEFAULT
+from train.core.algos.ppo_split import CHOICES as SPLIT_CHOICES, DEFAULT as SPLIT_DEFAULT
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP
 from train.db import ExperimentDB, default_path
 from train.core.early_stop import EARLY_STOP_SUCCESS, EARLY_STOP_TIMES, criterion_name
@@ -91,6 +92,10 @@ def parser() -> argparse.ArgumentParser:
                  help="compile the in-training evaluations' programs in threads of their own, started once "
                       "the training step is lowered: they compile beside it and while the run trains (auto: "
                       "where JAX's backend is not the CPU; train.core.ahead)")
+  p.add_argument("--split-update", choices=SPLIT_CHOICES, default=SPLIT_DEFAULT,
+                 help="PPO: the training step as programs that compile side by side (the policy and the "
+                      "physics; the rest of the env step; the SGD), its env steps a loop on the host; a run of "
+                      "one task only (auto: where JAX's backend is not the CPU; train.core.algos.ppo_split)")
   p.add_argument("--coordinator", metavar="HOST:PORT",
                  help="one process of a multi-process run (jax.distributed): process 0's address")
   p.add_argument("--num-processes", type=int, help="with --coordinator: how many processes")
@@ -240,7 +245,7 @@ def _own_session(plan: RunPlan, args, stop):
   early = f", early stop at {plan.early_stop}" if plan.early_stop else ""
   print(f"run {plan.run_id}: {plan.algo} ({plan.preset_name} preset), {plan.num_envs} envs on "
         f"{device_summary()}, {plan.total_steps:,} steps{early} -> {plan.out_dir}", flush=True)
-  options = SessionOptions(args.checkpoint_every, args.keep_checkpoints, args.compile_ahead)
+  options = SessionOptions(args.checkpoint_every, args.keep_checkpoints, args.compile_ahead, args.split_update)
   prepared = prepare(plan, options)
   return prepared.t.plan, lambda db: train(prepared, db, stop, options)
 

@@ -60,6 +60,21 @@ class EnvState:
   robust: rnd.RobustState | None = None  # the episode's randomization (None: randomization off)
 
 
+PERIOD = "period"  # state.info key of a Period that step() takes instead of running the physics
+
+
+@struct.dataclass
+class Period:
+  """One control period's command and physics (TrackedRobotEnv.period): what step() continues from."""
+
+  data: mjx.Data  # after the period's substeps, before sensing
+  collided: jax.Array  # () bool, the robot touched a wall or obstacle during the period
+  robust: rnd.RobustState | None  # the randomization's state after the period (None: randomization off)
+  belts: jax.Array  # (2,) m/s, the belt speeds the encoders read at the period's end
+  targets: jax.Array  # (n_joints,) rad, the joints' servo targets of the command
+  filtered: jax.Array  # () bool, the safety filter changed the command
+
+
 def make_scene(s: SceneConfig) -> StairScene | NavScene | TerrainScene:
   """The scene generator of a task's scene section (its kind's, scenes.kinds)."""
   return scene_kind(s.kind).make(s)
@@ -131,12 +146,25 @@ class TrackedRobotEnv(Env):
     return self.reset_at(rng, jnp.float32(self.curriculum.eps0), normalizer_init(self.cfg.reward).k)
 
   def step(self, state: State, action: jax.Array) -> State:
+    period = state.info.get(PERIOD)  # run ahead by a program of its own (train.core.algos.ppo_split)
+    return self._finish(state, self.period(state, action) if period is None else period)
+
+  def period(self, state: State, action: jax.Array) -> Period:
+    """The first part of step(state, action): the command and the control period's physics."""
     es: EnvState = state.pipeline_state
     m = self._model(es.scene, es.robust)
     v, w, targets = self.controller.decode(action, es.targets, state.info["eps"])
     v, w, filtered = self._safe_command(m, es, v, w)
     data, collided, robust, belts = self._advance(m, es, self.controller.belt_speeds(v, w), targets)
-    data = self._sense(m, data)
+    return Period(data, collided, robust, belts, targets, filtered)
+
+  def _finish(self, state: State, period: Period) -> State:
+    """The rest of step(state, action) after its period: sensing, reward, termination, observation."""
+    es: EnvState = state.pipeline_state
+    m = self._model(es.scene, es.robust)
+    collided, robust, belts, targets, filtered = (period.collided, period.robust, period.belts, period.targets,
+                                                  period.filtered)
+    data = self._sense(m, period.data)
     # a physics blow-up ends the episode and keeps the last finite state
     finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
     data = jax.tree_util.tree_map(lambda a, b: jnp.where(finite, a, b), data, es.data)

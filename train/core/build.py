@@ -19,6 +19,7 @@ from mjx_tracks import compile_cache
 from mjx_tracks.envs.task_env import TrackedRobotEnv
 from mjx_tracks.envs.wrappers import batched_env
 from train.core.algos.ppo import PPO, ppo_layout
+from train.core.algos.ppo_split import SplitUpdate
 from train.core.algos.sac import SAC
 from train.evaluation import scene_config
 from train.core.mesh import BATCH, ShardedStep, make_mesh, replicated, state_shardings, use_gspmd_partitioner
@@ -86,25 +87,29 @@ def shaped_state(t: Training):
                                 t.abstract, t.shardings)
 
 
-def compile_update(t: Training, stream=None, meanwhile: Callable[[], None] = lambda: None):
+def compile_update(t: Training, stream=None, meanwhile: Callable[[], None] = lambda: None, split: bool = False):
   """(the update compiled ahead of time with the state donated, the seconds that took); says
   beforehand how long it should take (on stream, default: sys.stdout as it is at the call).
-  meanwhile(): called once the update is lowered, while XLA compiles it (train.core.ahead.start)."""
+  meanwhile(): called once the update is lowered, while XLA compiles it (train.core.ahead.start).
+  split: PPO's update as programs compiled side by side (train.core.algos.ppo_split)."""
   stream = stream or sys.stdout  # not the one at import: a caller may have redirected it since
   config = hashlib.sha1(json.dumps(t.plan.cfg.to_dict(), sort_keys=True).encode()).hexdigest()[:8]
   what = (f"{t.plan.task}/{config}/{t.plan.algo}/{t.plan.preset_name}/{t.plan.num_envs} envs/"
-          f"{t.mesh.devices.size} x {jax.default_backend()}")
+          f"{t.mesh.devices.size} x {jax.default_backend()}{'/split' if split else ''}")
   last = compile_cache.last_compile_seconds(what)
   guess = f"up to ~{last:,.0f} s" if last is not None else "a minute or more the first time"
   print(f"compiling the training step ({guess}; the compilation cache makes later runs faster) ...",
         file=stream, flush=True)
   t0 = time.time()
   shaped = shaped_state(t)
-  jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,),
-                   out_shardings=(t.shardings, replicated(t.mesh)), donate_argnums=0)
-  lowered = jitted.lower(shaped)
-  meanwhile()
-  compiled = lowered.compile()
+  if split:
+    compiled = SplitUpdate(t.learner, t.core, t.mesh, t.shardings).compile(shaped, meanwhile)
+  else:
+    jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,),
+                     out_shardings=(t.shardings, replicated(t.mesh)), donate_argnums=0)
+    lowered = jitted.lower(shaped)
+    meanwhile()
+    compiled = lowered.compile()
   seconds = time.time() - t0
   compile_cache.record_compile_seconds(what, seconds)  # kept only if the longest yet
   print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)

@@ -21,11 +21,36 @@ def make_mesh() -> Mesh:
 def state_shardings(state, mesh: Mesh):
   """Shardings for a learner state: leaves of `state.env_state` split along their first (batch)
   axis, all others (parameters, optimizer, normalizer, replay buffer, keys) replicated."""
-  rep = replicated(mesh)
-  bat = NamedSharding(mesh, PartitionSpec(BATCH))
-  shard = jax.tree_util.tree_map(lambda _: rep, state)
-  env = jax.tree_util.tree_map(lambda x: bat if np.ndim(x) else rep, state.env_state)
-  return shard.replace(env_state=env)
+  shard = jax.tree_util.tree_map(lambda _: replicated(mesh), state)
+  return shard.replace(env_state=batch_shardings(state.env_state, mesh))
+
+
+def batch_shardings(tree, mesh: Mesh):
+  """Shardings for a tree of batched values: leaves split along their first (batch) axis, scalars replicated."""
+  return jax.tree_util.tree_map(lambda x: NamedSharding(mesh, _spec(x)), tree)
+
+
+def batch_sharding(mesh: Mesh) -> NamedSharding:
+  """An array split along its first (batch) axis over the mesh."""
+  return NamedSharding(mesh, PartitionSpec(BATCH))
+
+
+def batch_specs(tree):
+  """The partition of each leaf of a tree of batched values: its first axis along BATCH, scalars whole."""
+  return jax.tree_util.tree_map(_spec, tree)
+
+
+def _spec(x) -> PartitionSpec:
+  return PartitionSpec(BATCH) if np.ndim(x) else PartitionSpec()
+
+
+def each_device(fn, mesh: Mesh):
+  """fn of batched arguments, with a batched result, run by each device on its own part of the
+  batch (`jax.shard_map`, as ShardedStep does for the env's step)."""
+  def run(*args):
+    return jax.shard_map(fn, mesh=mesh, in_specs=batch_specs(args), out_specs=PartitionSpec(BATCH),
+                         check_vma=False)(*args)
+  return run
 
 
 class ShardedStep(Wrapper):
@@ -41,7 +66,7 @@ class ShardedStep(Wrapper):
     self.mesh = mesh
 
   def step(self, state, action):
-    specs = jax.tree_util.tree_map(lambda x: PartitionSpec(BATCH) if np.ndim(x) else PartitionSpec(), state)
+    specs = batch_specs(state)
     step = jax.shard_map(self.env.step, mesh=self.mesh, in_specs=(specs, PartitionSpec(BATCH)),
                          out_specs=specs, check_vma=False)
     return step(state, action)

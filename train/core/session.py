@@ -11,6 +11,7 @@ from typing import Any
 import jax
 
 from train.core import ahead
+from train.core.algos import ppo_split
 from train.core.build import Training, build, compile_update, init_state, make_evaluator
 from train.core.checkpoints import CHECKPOINT_EVERY_S, KEEP, CheckpointError, RunCheckpoints, checkpoint_dir, export_policy
 from train.evaluation import milestone_folder
@@ -26,6 +27,7 @@ class SessionOptions:
   checkpoint_every_s: float = CHECKPOINT_EVERY_S
   keep_checkpoints: int = KEEP
   compile_ahead: str = ahead.DEFAULT  # the evaluations' programs compiled while the run trains: train.core.ahead
+  split_update: str = ppo_split.DEFAULT  # PPO's update as programs compiled side by side: train.core.algos.ppo_split
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,7 +86,8 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
   plan = t.plan
   evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
   try:  # the evaluations trace once the update is lowered, and compile with it and while the run trains
-    update, seconds = compile_update(t, meanwhile=lambda: ahead.start(options.compile_ahead, (evaluate, probe), state))
+    update, seconds = compile_update(t, meanwhile=lambda: ahead.start(options.compile_ahead, (evaluate, probe), state),
+                                     split=ppo_split.wanted(options.split_update, t.plan.algo))
     db.compiled(plan.run_id, start_step, seconds)
     primary = jax.process_index() == 0  # under jax.distributed, process 0 reports
     reporter = Reporter(plan.total_steps, start_step, db, plan.run_id,

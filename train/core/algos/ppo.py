@@ -59,6 +59,12 @@ def ppo_layout(p: PPOPreset, num_envs: int, devices: int) -> PPOLayout:
   return PPOLayout(num_envs, p.unroll_length, unrolls, minibatches, note)
 
 
+def batch_major(data):
+  """Transitions [unrolls, unroll_length, num_envs, ...] -> [unrolls * num_envs, unroll_length, ...]."""
+  data = jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 1, 2), data)  # [U, B, T, ...]
+  return jax.tree_util.tree_map(lambda x: x.reshape((-1,) + x.shape[2:]), data)
+
+
 class PPO:
   """The learner: `init(key)` and the pure `update(state) -> (state, metrics)`."""
 
@@ -88,16 +94,26 @@ class PPO:
 
   def update(self, s: PPOState):
     """One PPO iteration: unrolls, normalizer update, epochs of minibatch SGD."""
-    k_sgd, k_unroll, k_next = jax.random.split(s.key, 3)
-    policy = self.make_policy((s.normalizer, s.params.policy))
+    k_sgd, k_unroll, k_next = self.keys(s.key)
+    policy = self.make_policy(self.policy_params(s))
     env_state, data = self._collect(s.env_state, policy, k_unroll)
+    return self.learn(s.replace(env_state=env_state), data, k_sgd, k_next)
+
+  @staticmethod
+  def keys(key: jax.Array):
+    """(SGD key, unrolls' key, the next update's key) of an update from state key `key`."""
+    return jax.random.split(key, 3)
+
+  def learn(self, s: PPOState, data, k_sgd: jax.Array, k_next: jax.Array):
+    """The update's second part, from its transitions data [unrolls * num_envs, unroll_length]:
+    normalizer update, epochs of minibatch SGD; s holds the environments after the unrolls."""
     normalizer = running_statistics.update(s.normalizer, data.observation)
     epoch = functools.partial(self._epoch, data=data, normalizer=normalizer)
     (opt_state, params, _), losses = jax.lax.scan(
         epoch, (s.opt_state, s.params, k_sgd), (), length=self.p.num_updates_per_batch)
     metrics = {f"training/{k}": jnp.mean(v) for k, v in losses.items()}
-    metrics.update(finished_sums(data.extras["state_extras"]), **curriculum_figures(env_state))
-    return PPOState(params, opt_state, normalizer, env_state, k_next), metrics
+    metrics.update(finished_sums(data.extras["state_extras"]), **curriculum_figures(s.env_state))
+    return PPOState(params, opt_state, normalizer, s.env_state, k_next), metrics
 
   def _collect(self, env_state, policy, key):
     """`unrolls` unrolls of every environment -> transitions [unrolls * num_envs, unroll_length]."""
@@ -109,8 +125,18 @@ class PPO:
       return (state, k_next), data
 
     (env_state, _), data = jax.lax.scan(unroll, (env_state, key), (), length=self.layout.unrolls)
-    data = jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 1, 2), data)  # [U, B, T, ...]
-    return env_state, jax.tree_util.tree_map(lambda x: x.reshape((-1,) + x.shape[2:]), data)
+    return env_state, batch_major(data)
+
+  def step_keys(self, key: jax.Array) -> jax.Array:
+    """The policy's key at each env step of _collect's unrolls from unrolls' key `key`, in order
+    ([unrolls * unroll_length] keys): the chains of its scan and of Brax's generate_unroll."""
+    def chain(k, _):
+      k, k_next = jax.random.split(k)
+      return k_next, k
+
+    _, per_unroll = jax.lax.scan(chain, key, (), length=self.layout.unrolls)
+    per_step = jax.vmap(lambda k: jax.lax.scan(chain, k, (), length=self.layout.unroll_length)[1])(per_unroll)
+    return per_step.reshape((-1,) + per_step.shape[2:])
 
   def _epoch(self, carry, _, data, normalizer):
     """One pass over the batch in shuffled minibatches."""

@@ -1,0 +1,134 @@
+"""PPO's update (train.core.algos.ppo) as four programs that XLA compiles side by side, the env
+steps of its unrolls a host loop: `keys`, then for each env step `act` (the policy and the control
+period's physics: MJX's substep loop) and `finish` (the rest of the env step: sensing, reward,
+auto-reset), then `learn` (normalizer update, SGD epochs).
+
+Why: XLA compiles one program on one thread; the fused update's compile is the sum of its parts,
+the physics loop about half of it (scripts/analysis/program_size.py --compile). Compiled apart and
+at once, the update is ready after its longest part. The price: 2 dispatches per env step (the
+`gpu` preset's update is 20 env steps, ~1.3 s on an H200) and no fusion across the cuts.
+
+It computes what PPO.update computes from the same state (the same keys in the same order;
+tests/test_ppo_split.py compares them), for a run on one mesh; several tasks in one program
+(train.core.group) keep the fused update.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import functools
+from typing import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from brax.envs.base import Wrapper
+from brax.training import acting
+
+from mjx_tracks.envs.task_env import PERIOD, TrackedRobotEnv
+from train.core.algos.ppo import PPO, STATE_EXTRAS, PPOState, batch_major
+from train.core.mesh import batch_sharding, each_device, replicated
+
+
+CHOICES = ("auto", "on", "off")  # train.run --split-update
+DEFAULT = "off"
+
+
+def wanted(choice: str, algo: str) -> bool:
+  """Whether `--split-update choice` splits a run's update here: PPO's, in a run of one process
+  (auto: where JAX's backend is not the CPU)."""
+  import jax  # noqa: PLC0415
+  if choice not in CHOICES:
+    raise ValueError(f"--split-update takes one of {', '.join(CHOICES)}, got {choice!r}")
+  if algo != "ppo" or jax.process_count() > 1:
+    return False
+  return choice == "on" or (choice == "auto" and jax.default_backend() != "cpu")
+
+
+class _WithPeriod(Wrapper):
+  """The training env whose step continues from a period computed beforehand (TrackedRobotEnv.step
+  takes it from state.info[PERIOD]), the period dropped from the state it returns."""
+
+  def __init__(self, env, period):
+    super().__init__(env)
+    self.period = period
+
+  def step(self, state, action):
+    state = self.env.step(state.replace(info={**state.info, PERIOD: self.period}), action)
+    return state.replace(info={k: v for k, v in state.info.items() if k != PERIOD})
+
+
+class SplitUpdate:
+  """The programs `keys`, `act`, `finish` and `learn` of learner's update; `compile` makes of them
+  an update(state) -> (state, metrics) equal to learner.update."""
+
+  def __init__(self, learner: PPO, core: TrackedRobotEnv, mesh, shardings):
+    self.learner, self.mesh, self.shardings = learner, mesh, shardings
+    self.physics = each_device(jax.vmap(core.period), mesh)
+    self.steps = learner.layout.unrolls * learner.layout.unroll_length  # env steps per update
+
+  # --- the four programs -----------------------------------------------------------------
+  def keys(self, key):
+    """(SGD key, the policy's key at each env step, the next update's key): PPO.update's."""
+    k_sgd, k_unroll, k_next = self.learner.keys(key)
+    return k_sgd, self.learner.step_keys(k_unroll), k_next
+
+  def act(self, env_state, policy_params, step_keys, i):
+    """(actions, the policy's extras, the control period) at env step i."""
+    actions, extras = self.learner.make_policy(policy_params)(env_state.obs, step_keys[i])
+    return actions, extras, self.physics(env_state, actions)
+
+  def finish(self, env_state, actions, extras, period):
+    """(the environments after the step, its transition): Brax's actor_step from the period."""
+    return acting.actor_step(_WithPeriod(self.learner.env, period), env_state, lambda *_: (actions, extras), None,
+                             extra_fields=STATE_EXTRAS)
+
+  def learn(self, s: PPOState, transitions, k_sgd, k_next):
+    """PPO.learn of the update's transitions (one per env step, in order)."""
+    layout = self.learner.layout
+    data = jax.tree_util.tree_map(lambda *x: jnp.stack(x), *transitions)  # [U * T, B, ...]
+    data = jax.tree_util.tree_map(lambda x: x.reshape((layout.unrolls, layout.unroll_length) + x.shape[1:]), data)
+    return self.learner.learn(s, batch_major(data), k_sgd, k_next)
+
+  # --- compiling and running them --------------------------------------------------------
+  def compile(self, shaped: PPOState, meanwhile: Callable[[], None] = lambda: None) -> Callable:
+    """update(state) -> (state, metrics) for states like `shaped` (shapes, dtypes, shardings):
+    lowers the programs and compiles each on its own thread as soon as it is lowered, the longest
+    first; meanwhile() is called once all are lowered."""
+    with concurrent.futures.ThreadPoolExecutor(4, thread_name_prefix="compile-update") as pool:
+      futures = {name: pool.submit(lowered.compile) for name, lowered in self._lowered(shaped)}
+      meanwhile()
+      return functools.partial(self._run, {name: f.result() for name, f in futures.items()})
+
+  def _run(self, programs: dict, s: PPOState):
+    k_sgd, step_keys, k_next = programs["keys"](s.key)
+    env_state, policy_params, transitions = s.env_state, self.learner.policy_params(s), []
+    for i in range(self.steps):
+      actions, extras, period = programs["act"](env_state, policy_params, step_keys, np.int32(i))
+      env_state, transition = programs["finish"](env_state, actions, extras, period)
+      transitions.append(transition)
+    return programs["learn"](s.replace(env_state=env_state), tuple(transitions), k_sgd, k_next)
+
+  def _lowered(self, shaped: PPOState):
+    """(name, lowered program) of each program, act first: its physics is the longest to compile.
+    Every value with a batch axis (actions, periods, transitions) is split along it as the
+    environments are (all their leaves have one); keys and the learner's state stay replicated."""
+    rep, bat = replicated(self.mesh), batch_sharding(self.mesh)
+    keys = jax.jit(self.keys, out_shardings=rep).trace(shaped.key)
+    k_sgd, step_keys, k_next = _shaped(keys.out_info, rep)
+    act = jax.jit(self.act, out_shardings=bat).trace(
+        shaped.env_state, self.learner.policy_params(shaped), step_keys, jax.ShapeDtypeStruct((), jnp.int32, sharding=rep))
+    yield "act", act.lower()
+    actions, extras, period = _shaped(act.out_info, bat)
+    finish = jax.jit(self.finish, out_shardings=(self.shardings.env_state, bat), donate_argnums=0).trace(
+        shaped.env_state, actions, extras, period)
+    yield "finish", finish.lower()
+    transitions = (_shaped(finish.out_info[1], bat),) * self.steps
+    learn = jax.jit(self.learn, out_shardings=(self.shardings, rep), donate_argnums=0)
+    yield "learn", learn.lower(shaped, transitions, k_sgd, k_next)
+    yield "keys", keys.lower()
+
+
+def _shaped(info, sharding):
+  """The ShapeDtypeStructs of a traced program's out_info, every leaf with `sharding`."""
+  return jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct(x.shape, x.dtype, sharding=sharding), info)
