@@ -63,6 +63,12 @@ class CurriculumAutoReset(Wrapper):
     return state
 
   def step(self, state: State, action: jax.Array) -> State:
+    return self.reset_where_done(*self.step_on(state, action))
+
+  def step_on(self, state: State, action: jax.Array) -> tuple[State, GlobalStats]:
+    """step's first part: (the environments after their step, the global state it updated, in
+    every environment as in info["global"]); the second (reset_where_done) starts new episodes
+    where these ended."""
     if "steps" in state.info:
       state.info["steps"] = jnp.where(state.done, 0, state.info["steps"])
     state = state.replace(done=jnp.zeros_like(state.done))
@@ -80,6 +86,14 @@ class CurriculumAutoReset(Wrapper):
       norm = normalizer_update(self.core.cfg.reward, glob.normalizer, done, penalty_sums)
     if self.report is not None:
       jax.debug.callback(self.report, GlobalStats(cur, norm))
+    n = done.shape[0]
+    return nstate, jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), GlobalStats(cur, norm))
+
+  def reset_where_done(self, nstate: State, glob: GlobalStats) -> State:
+    """step's second part (after step_on): a new episode (scene, spawn, observation) in every
+    environment whose episode ended, at the updated curriculum's difficulty."""
+    done = nstate.done.astype(bool)
+    cur, norm = jax.tree_util.tree_map(lambda x: x[0], (glob.curriculum, glob.normalizer))
     split = jax.vmap(jax.random.split)(nstate.info["reset_key"])
 
     def where_done(new, old):
@@ -95,8 +109,7 @@ class CurriculumAutoReset(Wrapper):
     es, obs = jax.lax.cond(jnp.any(done), reset_done, lambda _: (nstate.pipeline_state, nstate.obs), None)
     es = es.replace(penalty_k=jnp.broadcast_to(norm.k, es.penalty_k.shape))
     n = done.shape[0]
-    nstate.info["global"] = jax.tree_util.tree_map(
-        lambda x: jnp.broadcast_to(x, (n,) + x.shape), GlobalStats(cur, norm))
+    nstate.info["global"] = glob
     nstate.info["reset_key"] = split[:, 1]
     nstate.info["final_obs"] = nstate.obs
     nstate.info["eps"] = jnp.broadcast_to(cur.eps, (n,))

@@ -55,6 +55,9 @@ VARIANTS = {  # name -> XLA_FLAGS added to the environment's
 }
 
 
+COMPILE_LINES = ("compiled in", "  its programs")  # train.core.build.compile_update's report
+
+
 def _variant(name: str, flags: str, args, work: str) -> dict:
   flags = flags.format(work=work)
   env = {**os.environ, "MJX_TRACKS_CACHE": f"{work}/{name}-cache", "MJX_TRACKS_COMPILE_LOG": f"{work}/{name}.compile.log",
@@ -77,7 +80,9 @@ def _variant(name: str, flags: str, args, work: str) -> dict:
           "train_steps_per_s": runs.steady_rate(runs.training_rates(database)) if made else None,
           "run_wall_s": round(wall, 1),
           "eval_wall_s": eval_wall, "eval_rc": None if ev is None else ev.returncode, "hardest_success": success,
-          "longest_compilations": longest_compilations(env["MJX_TRACKS_COMPILE_LOG"]), "log_tail": out[-600:]}
+          "longest_compilations": longest_compilations(env["MJX_TRACKS_COMPILE_LOG"]),
+          "compile_lines": [line.strip() for line in proc.stdout.splitlines() if line.startswith(COMPILE_LINES)],
+          "log_tail": out[-600:]}
 
 
 def _evaluate(run: str, env: dict, work: str, name: str, code: str | None):

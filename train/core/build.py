@@ -103,7 +103,7 @@ def compile_update(t: Training, stream=None, meanwhile: Callable[[], None] = lam
   t0 = time.time()
   shaped = shaped_state(t)
   if split:
-    compiled = SplitUpdate(t.learner, t.core, t.mesh, t.shardings).compile(shaped, meanwhile)
+    compiled = SplitUpdate(t.learner, t.core, t.mesh, t.shardings).compile(shaped, meanwhile, stream)
   else:
     jitted = jax.jit(t.learner.update, in_shardings=(t.shardings,),
                      out_shardings=(t.shardings, replicated(t.mesh)), donate_argnums=0)

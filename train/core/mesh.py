@@ -65,6 +65,14 @@ class ShardedStep(Wrapper):
     super().__init__(env)
     self.mesh = mesh
 
+  def step_on(self, state, action):
+    """The wrapped env's step_on (mjx_tracks.envs.wrappers.CurriculumAutoReset) on each device's part."""
+    return each_device(self.env.step_on, self.mesh)(state, action)
+
+  def reset_where_done(self, nstate, glob):
+    """The wrapped env's reset_where_done on each device's part."""
+    return each_device(self.env.reset_where_done, self.mesh)(nstate, glob)
+
   def step(self, state, action):
     specs = batch_specs(state)
     step = jax.shard_map(self.env.step, mesh=self.mesh, in_specs=(specs, PartitionSpec(BATCH)),

@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import concurrent.futures
 import functools
+import time
 from typing import Callable
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from brax.envs.base import Wrapper
 from brax.training import acting
 
 from mjx_tracks.envs.task_env import PERIOD, TrackedRobotEnv
@@ -30,6 +30,7 @@ from train.core.algos.ppo import PPO, STATE_EXTRAS, PPOState, batch_major
 from train.core.mesh import batch_sharding, each_device, replicated
 
 
+PROGRAMS = ("act", "finish", "reset", "learn", "keys")  # in the order they are lowered
 CHOICES = ("auto", "on", "off")  # train.run --split-update
 DEFAULT = "off"
 
@@ -45,19 +46,6 @@ def wanted(choice: str, algo: str) -> bool:
   return choice == "on" or (choice == "auto" and jax.default_backend() != "cpu")
 
 
-class _WithPeriod(Wrapper):
-  """The training env whose step continues from a period computed beforehand (TrackedRobotEnv.step
-  takes it from state.info[PERIOD]), the period dropped from the state it returns."""
-
-  def __init__(self, env, period):
-    super().__init__(env)
-    self.period = period
-
-  def step(self, state, action):
-    state = self.env.step(state.replace(info={**state.info, PERIOD: self.period}), action)
-    return state.replace(info={k: v for k, v in state.info.items() if k != PERIOD})
-
-
 class SplitUpdate:
   """The programs `keys`, `act`, `finish` and `learn` of learner's update; `compile` makes of them
   an update(state) -> (state, metrics) equal to learner.update."""
@@ -67,7 +55,7 @@ class SplitUpdate:
     self.physics = each_device(jax.vmap(core.period), mesh)
     self.steps = learner.layout.unrolls * learner.layout.unroll_length  # env steps per update
 
-  # --- the four programs -----------------------------------------------------------------
+  # --- the programs ----------------------------------------------------------------------
   def keys(self, key):
     """(SGD key, the policy's key at each env step, the next update's key): PPO.update's."""
     k_sgd, k_unroll, k_next = self.learner.keys(key)
@@ -78,9 +66,18 @@ class SplitUpdate:
     actions, extras = self.learner.make_policy(policy_params)(env_state.obs, step_keys[i])
     return actions, extras, self.physics(env_state, actions)
 
-  def finish(self, env_state, actions, extras, period):
-    """(the environments after the step, its transition): Brax's actor_step from the period."""
-    return acting.actor_step(_WithPeriod(self.learner.env, period), env_state, lambda *_: (actions, extras), None,
+  def finish(self, env_state, actions, period):
+    """(the environments after the step, before new episodes start; the global state it updated;
+    the observations it started from): the env's step_on, from the period."""
+    nstate, glob = self.learner.env.step_on(env_state.replace(info={**env_state.info, PERIOD: period}), actions)
+    return nstate.replace(info={k: v for k, v in nstate.info.items() if k != PERIOD}), glob, env_state.obs
+
+  def reset(self, obs, actions, extras, nstate, glob):
+    """(the environments after the step, new episodes started where theirs ended; the step's
+    transition, as Brax's actor_step makes it: from observations obs, the step's actions and the
+    policy's extras)."""
+    after = _Stepped(self.learner.env.reset_where_done(nstate, glob))
+    return acting.actor_step(after, nstate.replace(obs=obs), lambda *_: (actions, extras), None,
                              extra_fields=STATE_EXTRAS)
 
   def learn(self, s: PPOState, transitions, k_sgd, k_next):
@@ -91,21 +88,35 @@ class SplitUpdate:
     return self.learner.learn(s, batch_major(data), k_sgd, k_next)
 
   # --- compiling and running them --------------------------------------------------------
-  def compile(self, shaped: PPOState, meanwhile: Callable[[], None] = lambda: None) -> Callable:
+  def compile(self, shaped: PPOState, meanwhile: Callable[[], None] = lambda: None, stream=None) -> Callable:
     """update(state) -> (state, metrics) for states like `shaped` (shapes, dtypes, shardings):
     lowers the programs and compiles each on its own thread as soon as it is lowered, the longest
-    first; meanwhile() is called once all are lowered."""
-    with concurrent.futures.ThreadPoolExecutor(4, thread_name_prefix="compile-update") as pool:
-      futures = {name: pool.submit(lowered.compile) for name, lowered in self._lowered(shaped)}
+    first; meanwhile() is called once all are lowered. On stream (if given): when each program was
+    lowered and compiled, in seconds from the call."""
+    t0, clock = time.time(), {}
+
+    def compiled(name, lowered):
+      clock[name] = [time.time() - t0]
+      program = lowered.compile()
+      clock[name].append(time.time() - t0)
+      return program
+
+    with concurrent.futures.ThreadPoolExecutor(len(PROGRAMS), thread_name_prefix="compile-update") as pool:
+      futures = {name: pool.submit(compiled, name, lowered) for name, lowered in self._lowered(shaped)}
       meanwhile()
-      return functools.partial(self._run, {name: f.result() for name, f in futures.items()})
+      programs = {name: f.result() for name, f in futures.items()}
+    if stream is not None:
+      print("  its programs, lowered -> compiled (s): " + ", ".join(
+          f"{name} {clock[name][0]:.1f} -> {clock[name][1]:.1f}" for name in PROGRAMS), file=stream, flush=True)
+    return functools.partial(self._run, programs)
 
   def _run(self, programs: dict, s: PPOState):
     k_sgd, step_keys, k_next = programs["keys"](s.key)
     env_state, policy_params, transitions = s.env_state, self.learner.policy_params(s), []
     for i in range(self.steps):
       actions, extras, period = programs["act"](env_state, policy_params, step_keys, np.int32(i))
-      env_state, transition = programs["finish"](env_state, actions, extras, period)
+      nstate, glob, obs = programs["finish"](env_state, actions, period)
+      env_state, transition = programs["reset"](obs, actions, extras, nstate, glob)
       transitions.append(transition)
     return programs["learn"](s.replace(env_state=env_state), tuple(transitions), k_sgd, k_next)
 
@@ -120,13 +131,26 @@ class SplitUpdate:
         shaped.env_state, self.learner.policy_params(shaped), step_keys, jax.ShapeDtypeStruct((), jnp.int32, sharding=rep))
     yield "act", act.lower()
     actions, extras, period = _shaped(act.out_info, bat)
-    finish = jax.jit(self.finish, out_shardings=(self.shardings.env_state, bat), donate_argnums=0).trace(
-        shaped.env_state, actions, extras, period)
+    finish = jax.jit(self.finish, out_shardings=bat, donate_argnums=0).trace(shaped.env_state, actions, period)
+    nstate, glob, obs = _shaped(finish.out_info, bat)
+    reset = jax.jit(self.reset, out_shardings=(self.shardings.env_state, bat), donate_argnums=3).trace(
+        obs, actions, extras, nstate, glob)
     yield "finish", finish.lower()
-    transitions = (_shaped(finish.out_info[1], bat),) * self.steps
+    yield "reset", reset.lower()
+    transitions = (_shaped(reset.out_info[1], bat),) * self.steps
     learn = jax.jit(self.learn, out_shardings=(self.shardings, rep), donate_argnums=0)
     yield "learn", learn.lower(shaped, transitions, k_sgd, k_next)
     yield "keys", keys.lower()
+
+
+class _Stepped:
+  """An env whose step returns a given state (acting.actor_step's env, the step made beforehand)."""
+
+  def __init__(self, state):
+    self.state = state
+
+  def step(self, *_):
+    return self.state
 
 
 def _shaped(info, sharding):
