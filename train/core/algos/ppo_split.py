@@ -50,8 +50,10 @@ class SplitUpdate:
   """The programs `keys`, `act`, `finish` and `learn` of learner's update; `compile` makes of them
   an update(state) -> (state, metrics) equal to learner.update."""
 
-  def __init__(self, learner: PPO, core: TrackedRobotEnv, mesh, shardings):
+  def __init__(self, learner: PPO, core: TrackedRobotEnv, mesh, shardings, reset_apart: bool = True):
     self.learner, self.mesh, self.shardings = learner, mesh, shardings
+    self.reset_apart = reset_apart  # the auto-reset a program of its own (else: in `step`, with `finish`)
+    self.names = PROGRAMS if reset_apart else ("act", "step", "learn", "keys")  # in the order they are lowered
     self.physics = each_device(jax.vmap(core.period), mesh)
     self.steps = learner.layout.unrolls * learner.layout.unroll_length  # env steps per update
 
@@ -80,6 +82,11 @@ class SplitUpdate:
     return acting.actor_step(after, nstate.replace(obs=obs), lambda *_: (actions, extras), None,
                              extra_fields=STATE_EXTRAS)
 
+  def step(self, env_state, actions, extras, period):
+    """finish, then reset: (the environments after the step, its transition)."""
+    nstate, glob, obs = self.finish(env_state, actions, period)
+    return self.reset(obs, actions, extras, nstate, glob)
+
   def learn(self, s: PPOState, transitions, k_sgd, k_next):
     """PPO.learn of the update's transitions (one per env step, in order)."""
     layout = self.learner.layout
@@ -101,22 +108,26 @@ class SplitUpdate:
       clock[name].append(time.time() - t0)
       return program
 
-    with concurrent.futures.ThreadPoolExecutor(len(PROGRAMS), thread_name_prefix="compile-update") as pool:
+    with concurrent.futures.ThreadPoolExecutor(len(self.names), thread_name_prefix="compile-update") as pool:
       futures = {name: pool.submit(compiled, name, lowered) for name, lowered in self._lowered(shaped)}
       meanwhile()
       programs = {name: f.result() for name, f in futures.items()}
     if stream is not None:
       print("  its programs, lowered -> compiled (s): " + ", ".join(
-          f"{name} {clock[name][0]:.1f} -> {clock[name][1]:.1f}" for name in PROGRAMS), file=stream, flush=True)
-    return functools.partial(self._run, programs)
+          f"{name} {clock[name][0]:.1f} -> {clock[name][1]:.1f}" for name in self.names), file=stream, flush=True)
+    steps = [jax.device_put(np.int32(i), replicated(self.mesh)) for i in range(self.steps)]  # on the device once
+    return functools.partial(self._run, programs, steps)
 
-  def _run(self, programs: dict, s: PPOState):
+  def _run(self, programs: dict, steps: list, s: PPOState):
     k_sgd, step_keys, k_next = programs["keys"](s.key)
     env_state, policy_params, transitions = s.env_state, self.learner.policy_params(s), []
-    for i in range(self.steps):
-      actions, extras, period = programs["act"](env_state, policy_params, step_keys, np.int32(i))
-      nstate, glob, obs = programs["finish"](env_state, actions, period)
-      env_state, transition = programs["reset"](obs, actions, extras, nstate, glob)
+    for i in steps:
+      actions, extras, period = programs["act"](env_state, policy_params, step_keys, i)
+      if self.reset_apart:
+        nstate, glob, obs = programs["finish"](env_state, actions, period)
+        env_state, transition = programs["reset"](obs, actions, extras, nstate, glob)
+      else:
+        env_state, transition = programs["step"](env_state, actions, extras, period)
       transitions.append(transition)
     return programs["learn"](s.replace(env_state=env_state), tuple(transitions), k_sgd, k_next)
 
@@ -131,13 +142,17 @@ class SplitUpdate:
         shaped.env_state, self.learner.policy_params(shaped), step_keys, jax.ShapeDtypeStruct((), jnp.int32, sharding=rep))
     yield "act", act.lower()
     actions, extras, period = _shaped(act.out_info, bat)
-    finish = jax.jit(self.finish, out_shardings=bat, donate_argnums=0).trace(shaped.env_state, actions, period)
-    nstate, glob, obs = _shaped(finish.out_info, bat)
-    reset = jax.jit(self.reset, out_shardings=(self.shardings.env_state, bat), donate_argnums=3).trace(
-        obs, actions, extras, nstate, glob)
-    yield "finish", finish.lower()
-    yield "reset", reset.lower()
-    transitions = (_shaped(reset.out_info[1], bat),) * self.steps
+    if self.reset_apart:
+      finish = jax.jit(self.finish, out_shardings=bat, donate_argnums=0).trace(shaped.env_state, actions, period)
+      nstate, glob, obs = _shaped(finish.out_info, bat)
+      last = jax.jit(self.reset, out_shardings=(self.shardings.env_state, bat), donate_argnums=3).trace(
+          obs, actions, extras, nstate, glob)
+      yield "finish", finish.lower()
+    else:
+      last = jax.jit(self.step, out_shardings=(self.shardings.env_state, bat), donate_argnums=0).trace(
+          shaped.env_state, actions, extras, period)
+    yield ("reset" if self.reset_apart else "step"), last.lower()
+    transitions = (_shaped(last.out_info[1], bat),) * self.steps
     learn = jax.jit(self.learn, out_shardings=(self.shardings, rep), donate_argnums=0)
     yield "learn", learn.lower(shaped, transitions, k_sgd, k_next)
     yield "keys", keys.lower()
