@@ -32,7 +32,7 @@ from train.core.mesh import batch_sharding, each_device, replicated
 
 PROGRAMS = ("act", "finish", "reset", "learn", "keys")  # in the order they are lowered
 CHOICES = ("auto", "on", "off")  # train.run --split-update
-DEFAULT = "off"
+DEFAULT = "auto"
 
 
 def wanted(choice: str, algo: str) -> bool:
