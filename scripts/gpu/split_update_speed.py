@@ -5,7 +5,7 @@ steps/s over UPDATES updates after 2 warm-up updates; the median seconds its cal
 (a host loop that waits for the device returns as late as the update ends: its dispatches then add
 to the update's time); the compile seconds in this process (not from an empty cache: JAX and XLA
 keep what earlier variants compiled; scripts/gpu/compile_flags.py times that).
-Usage (GPU host): python scripts/gpu/split_update_speed.py OUT [--updates 4] [train.run arguments ...]
+Usage (GPU host): python scripts/gpu/split_update_speed.py OUT [--updates 4] [--order V,...] [train.run arguments ...]
 (default: --task asc-inc-cog --preset gpu). Writes OUT/split-update-speed.json with device, command, date."""
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
-VARIANTS = ("fused", "split-5", "split-4")
+VARIANTS = ("fused", "split-5", "split-4")  # the default order, twice; --order NAME,... (also split-5-serial:
+#                                               its programs compiled one at a time) runs those once each
 
 
 def _compile(t, name: str):
@@ -28,7 +29,8 @@ def _compile(t, name: str):
   from train.core.build import shaped_state  # noqa: PLC0415
   if name == "fused":
     return jax.jit(t.learner.update, donate_argnums=0).lower(shaped_state(t)).compile()
-  return SplitUpdate(t.learner, t.core, t.mesh, t.shardings, reset_apart=name == "split-5").compile(shaped_state(t))
+  split = SplitUpdate(t.learner, t.core, t.mesh, t.shardings, reset_apart=name.startswith("split-5"))
+  return split.compile(shaped_state(t), threads=1 if name.endswith("serial") else None)
 
 
 def _measure(t, name: str, updates: int) -> dict:
@@ -57,17 +59,21 @@ def main() -> None:
   if len(sys.argv) < 2 or sys.argv[1].startswith("-"):
     sys.exit(__doc__)
   out, rest = sys.argv[1], sys.argv[2:]
-  updates = 4
-  if rest[:1] == ["--updates"]:
-    updates, rest = int(rest[1]), rest[2:]
+  updates, order = 4, VARIANTS * 2
+  while rest[:1] in (["--updates"], ["--order"]):
+    if rest[0] == "--updates":
+      updates = int(rest[1])
+    else:
+      order = tuple(rest[1].split(","))
+    rest = rest[2:]
   import jax  # noqa: PLC0415
   from train.core.build import build  # noqa: PLC0415
   from train.core.plan import plan_run  # noqa: PLC0415
   from train.run import parser  # noqa: PLC0415
   args = rest or ["--task", "asc-inc-cog", "--preset", "gpu"]
   t = build(plan_run(parser().parse_args([*args, "--out", os.path.join(out, "run")])))
-  results: dict[str, list] = {name: [] for name in VARIANTS}
-  for name in VARIANTS * 2:
+  results: dict[str, list] = {name: [] for name in order}
+  for name in order:
     results[name].append(_measure(t, name, updates))
     print(name, results[name][-1], flush=True)
   os.makedirs(out, exist_ok=True)

@@ -95,11 +95,12 @@ class SplitUpdate:
     return self.learner.learn(s, batch_major(data), k_sgd, k_next)
 
   # --- compiling and running them --------------------------------------------------------
-  def compile(self, shaped: PPOState, meanwhile: Callable[[], None] = lambda: None, stream=None) -> Callable:
+  def compile(self, shaped: PPOState, meanwhile: Callable[[], None] = lambda: None, stream=None,
+              threads: int | None = None) -> Callable:
     """update(state) -> (state, metrics) for states like `shaped` (shapes, dtypes, shardings):
     lowers the programs and compiles each on its own thread as soon as it is lowered, the longest
     first; meanwhile() is called once all are lowered. On stream (if given): when each program was
-    lowered and compiled, in seconds from the call."""
+    lowered and compiled, in seconds from the call. threads: compiling at once (default: all)."""
     t0, clock = time.time(), {}
 
     def compiled(name, lowered):
@@ -108,7 +109,7 @@ class SplitUpdate:
       clock[name].append(time.time() - t0)
       return program
 
-    with concurrent.futures.ThreadPoolExecutor(len(self.names), thread_name_prefix="compile-update") as pool:
+    with concurrent.futures.ThreadPoolExecutor(threads or len(self.names), thread_name_prefix="compile-update") as pool:
       futures = {name: pool.submit(compiled, name, lowered) for name, lowered in self._lowered(shaped)}
       meanwhile()
       programs = {name: f.result() for name, f in futures.items()}
