@@ -1,16 +1,18 @@
-"""PPO's update (train.core.algos.ppo) as four programs that XLA compiles side by side, the env
-steps of its unrolls a host loop: `keys`, then for each env step `act` (the policy and the control
-period's physics: MJX's substep loop) and `finish` (the rest of the env step: sensing, reward,
-auto-reset), then `learn` (normalizer update, SGD epochs).
+"""PPO's update (train.core.algos.ppo) as five programs that XLA compiles side by side, the env
+steps of its unrolls a loop on the host: `keys`, then for each env step `act` (the policy and the
+control period's physics: MJX's substep loop), `finish` (the rest of the env step: sensing, reward,
+the curriculum's update) and `reset` (new episodes where theirs ended; the step's transition), then
+`learn` (normalizer update, SGD epochs).
 
-Why: XLA compiles one program on one thread; the fused update's compile is the sum of its parts,
-the physics loop about half of it (scripts/analysis/program_size.py --compile). Compiled apart and
-at once, the update is ready after its longest part. The price: 2 dispatches per env step (the
-`gpu` preset's update is 20 env steps, ~1.3 s on an H200) and no fusion across the cuts.
+Why: XLA compiles a program on one thread, so the fused update's compilation is the sum of its
+parts, the physics loop about half of it (scripts/analysis/program_size.py --compile). Compiled
+apart and at once, the update is ready after its longest part (19-20 s against 29-33 s on an H200:
+docs/benchmarks.md). The price: 3 dispatches an env step (the `gpu` preset's update is 20 env steps,
+~1.2 s on an H200) and no fusion across the cuts; its updates ran 2-3 % faster there.
 
 It computes what PPO.update computes from the same state (the same keys in the same order;
-tests/test_ppo_split.py compares them), for a run on one mesh; several tasks in one program
-(train.core.group) keep the fused update.
+tests/test_ppo_split.py compares them), for a run of one task; a program of several runs
+(train.core.group) keeps the fused update, and so does SAC.
 """
 
 from __future__ import annotations
@@ -38,7 +40,6 @@ DEFAULT = "auto"
 def wanted(choice: str, algo: str) -> bool:
   """Whether `--split-update choice` splits a run's update here: PPO's, in a run of one process
   (auto: where JAX's backend is not the CPU)."""
-  import jax  # noqa: PLC0415
   if choice not in CHOICES:
     raise ValueError(f"--split-update takes one of {', '.join(CHOICES)}, got {choice!r}")
   if algo != "ppo" or jax.process_count() > 1:
@@ -47,12 +48,13 @@ def wanted(choice: str, algo: str) -> bool:
 
 
 class SplitUpdate:
-  """The programs `keys`, `act`, `finish` and `learn` of learner's update; `compile` makes of them
-  an update(state) -> (state, metrics) equal to learner.update."""
+  """The programs of learner's update (PROGRAMS; with reset_apart=False four: `finish` and `reset`
+  as one, `step`); `compile` makes of them an update(state) -> (state, metrics) equal to
+  learner.update, up to float32 rounding."""
 
   def __init__(self, learner: PPO, core: TrackedRobotEnv, mesh, shardings, reset_apart: bool = True):
     self.learner, self.mesh, self.shardings = learner, mesh, shardings
-    self.reset_apart = reset_apart  # the auto-reset a program of its own (else: in `step`, with `finish`)
+    self.reset_apart = reset_apart  # the auto-reset a program of its own (False: scripts/gpu/split_update_speed.py)
     self.names = PROGRAMS if reset_apart else ("act", "step", "learn", "keys")  # in the order they are lowered
     self.physics = each_device(jax.vmap(core.period), mesh)
     self.steps = learner.layout.unrolls * learner.layout.unroll_length  # env steps per update
@@ -98,7 +100,7 @@ class SplitUpdate:
   def compile(self, shaped: PPOState, meanwhile: Callable[[], None] = lambda: None, stream=None,
               threads: int | None = None) -> Callable:
     """update(state) -> (state, metrics) for states like `shaped` (shapes, dtypes, shardings):
-    lowers the programs and compiles each on its own thread as soon as it is lowered, the longest
+    lowers the programs and compiles each on its own thread as soon as it is lowered, the physics
     first; meanwhile() is called once all are lowered. On stream (if given): when each program was
     lowered and compiled, in seconds from the call. threads: compiling at once (default: all)."""
     t0, clock = time.time(), {}
@@ -133,7 +135,7 @@ class SplitUpdate:
     return programs["learn"](s.replace(env_state=env_state), tuple(transitions), k_sgd, k_next)
 
   def _lowered(self, shaped: PPOState):
-    """(name, lowered program) of each program, act first: its physics is the longest to compile.
+    """(name, lowered program) of each program, act first: its physics takes the longest to compile.
     Every value with a batch axis (actions, periods, transitions) is split along it as the
     environments are (all their leaves have one); keys and the learner's state stay replicated."""
     rep, bat = replicated(self.mesh), batch_sharding(self.mesh)
