@@ -224,7 +224,7 @@ def _train_group(plans: list[RunPlan], args) -> int:
 
     try:
       finals = train_group(t, plans, dbs, stop, SessionOptions(args.checkpoint_every, args.keep_checkpoints,
-                                                                args.compile_ahead), on_end)
+                                                                args.compile_ahead, args.split_update), on_end)
     finally:
       for i, (q, db) in enumerate(zip(plans, dbs)):
         if i not in ended:  # the program failed before this run ended

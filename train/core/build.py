@@ -6,7 +6,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import functools
-import gc
 import hashlib
 import json
 import sys
@@ -114,10 +113,6 @@ def compile_update(t: Training, stream=None, meanwhile: Callable[[], None] = lam
   seconds = time.time() - t0
   compile_cache.record_compile_seconds(what, seconds)  # kept only if the longest yet
   print(f"compiled in {seconds:,.0f} s", file=stream, flush=True)
-  # the ~0.6 M Python objects that building and compiling left (JAX's traces, MJX's model) out of
-  # the collector's full passes: one pass over them paused a split update's host loop ~0.25 s (this
-  # CPU, 2026-11-29: 9 ms once frozen)
-  gc.freeze()
   return compiled, seconds
 
 

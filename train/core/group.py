@@ -203,6 +203,9 @@ def train_group(t: Training, plans: list[RunPlan], dbs: list, stop, options: Ses
   def after_update(states, step: int) -> None:
     for s in shared:
       s.at(states, step)
+  if options.split_update == "on":
+    print("note: --split-update on applies to a run of one task; a program of several runs keeps its update whole",
+          flush=True)
   try:  # the evaluations trace once the update is lowered, and compile with it and while the runs train
     update, seconds = compile_group(t, len(plans), tasks=tasks,
                                     meanwhile=lambda: ahead.start(options.compile_ahead, shared, states))
