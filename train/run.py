@@ -95,7 +95,8 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--split-update", choices=SPLIT_CHOICES, default=SPLIT_DEFAULT,
                  help="PPO: the training step as programs that compile side by side (the policy and the "
                       "physics; the rest of the env step; the SGD), its env steps a loop on the host; a run of "
-                      "one task only (auto: where JAX's backend is not the CPU; train.core.algos.ppo_split)")
+                      "one task in one process only (auto: where JAX's backend is not the CPU; "
+                      "train.core.algos.ppo_split)")
   p.add_argument("--coordinator", metavar="HOST:PORT",
                  help="one process of a multi-process run (jax.distributed): process 0's address")
   p.add_argument("--num-processes", type=int, help="with --coordinator: how many processes")

@@ -47,7 +47,7 @@ def _measure(t, name: str, updates: int) -> dict:
   returned, t0 = [], time.time()
   for _ in range(updates):
     t1 = time.time()
-    state, metrics = update(state)
+    state, _ = update(state)
     returned.append(time.time() - t1)
   jax.block_until_ready(state)
   seconds = (time.time() - t0) / updates

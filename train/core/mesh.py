@@ -30,7 +30,7 @@ def batch_shardings(tree, mesh: Mesh):
   return jax.tree_util.tree_map(lambda x: NamedSharding(mesh, _spec(x)), tree)
 
 
-def batch_sharding(mesh: Mesh) -> NamedSharding:
+def split_along_batch(mesh: Mesh) -> NamedSharding:
   """An array split along its first (batch) axis over the mesh."""
   return NamedSharding(mesh, PartitionSpec(BATCH))
 

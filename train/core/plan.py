@@ -77,8 +77,8 @@ def _plan_resume(args: argparse.Namespace) -> RunPlan:
   given = [f"--{n.replace('_', '-')}" for n in RESUME_FIXED if getattr(args, n) not in (None, [], False)]
   if given:
     raise RunError(f"--resume continues a run with its own settings; drop {', '.join(given)} "
-                   "(only --steps, --db, --checkpoint-every, --keep-checkpoints, --compile-ahead and --split-update may "
-                   "be given)")
+                   "(only --steps, --db, --checkpoint-every, --keep-checkpoints, --compile-ahead and "
+                   "--split-update may be given)")
   try:
     meta = read_run_record(args.resume)
   except (FileNotFoundError, ValueError) as e:

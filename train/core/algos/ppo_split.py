@@ -6,9 +6,9 @@ the curriculum's update) and `reset` (new episodes where theirs ended; the step'
 
 Why: XLA compiles a program on one thread, so the fused update's compilation is the sum of its
 parts, the physics loop about half of it (scripts/analysis/program_size.py --compile). Compiled
-apart and at once, the update is ready after its longest part (19-20 s against 29-33 s on an H200:
-docs/benchmarks.md). The price: 3 dispatches an env step (the `gpu` preset's update is 20 env steps,
-~1.2 s on an H200) and no fusion across the cuts; its updates ran 2-3 % faster there.
+apart and at once, the update is ready after its longest parts (docs/benchmarks.md, "PPO's update as
+programs side by side"). The price: 3 dispatches an env step (the `gpu` preset's update is 20 env
+steps) and no fusion across the cuts.
 
 It computes what PPO.update computes from the same state (the same keys in the same order;
 tests/test_ppo_split.py compares them), for a run of one task; a program of several runs
@@ -30,7 +30,7 @@ from brax.training import acting
 
 from mjx_tracks.envs.task_env import PERIOD, TrackedRobotEnv
 from train.core.algos.ppo import PPO, STATE_EXTRAS, PPOState, batch_major
-from train.core.mesh import batch_sharding, each_device, replicated
+from train.core.mesh import each_device, replicated, split_along_batch
 
 
 PROGRAMS = ("act", "finish", "reset", "learn", "keys")  # in the order they are lowered
@@ -55,7 +55,7 @@ class SplitUpdate:
 
   def __init__(self, learner: PPO, core: TrackedRobotEnv, mesh, shardings, reset_apart: bool = True):
     self.learner, self.mesh, self.shardings = learner, mesh, shardings
-    self.reset_apart = reset_apart  # the auto-reset a program of its own (False: scripts/gpu/split_update_speed.py)
+    self.reset_apart = reset_apart  # the auto-reset a program of its own (False: split_update_speed.py's)
     self.names = PROGRAMS if reset_apart else ("act", "step", "learn", "keys")  # in the order they are lowered
     self.physics = each_device(jax.vmap(core.period), mesh)
     self.steps = learner.layout.unrolls * learner.layout.unroll_length  # env steps per update
@@ -112,7 +112,8 @@ class SplitUpdate:
       clock[name].append(time.time() - t0)
       return program
 
-    with concurrent.futures.ThreadPoolExecutor(threads or len(self.names), thread_name_prefix="compile-update") as pool:
+    threads = threads or len(self.names)
+    with concurrent.futures.ThreadPoolExecutor(threads, thread_name_prefix="compile-update") as pool:
       futures = {name: pool.submit(compiled, name, lowered) for name, lowered in self._lowered(shaped)}
       meanwhile()
       programs = {name: f.result() for name, f in futures.items()}
@@ -120,8 +121,8 @@ class SplitUpdate:
       print("  its programs, lowered -> compiled (s): " + ", ".join(
           f"{name} {clock[name][0]:.1f} -> {clock[name][1]:.1f}" for name in self.names), file=stream, flush=True)
     steps = [jax.device_put(np.int32(i), replicated(self.mesh)) for i in range(self.steps)]  # on the device once
-    # the ~0.6 M Python objects that building and compiling left (JAX's traces, MJX's model) out of
-    # the collector's full passes: one pass over them took 0.25 s (this 2-core CPU, 2026-11-29; 9 ms
+    # the ~0.56 M Python objects that building and compiling left (JAX's traces, MJX's model) out of
+    # the collector's full passes: one pass over them took 0.27 s (scripts/analysis/gc_pause.py; 1 ms
     # once frozen), a pause in the host loop, which allocates many small objects each update
     gc.freeze()
     return functools.partial(self._run, programs, steps)
@@ -143,11 +144,11 @@ class SplitUpdate:
     """(name, lowered program) of each program, act first: its physics takes the longest to compile.
     Every value with a batch axis (actions, periods, transitions) is split along it as the
     environments are (all their leaves have one); keys and the learner's state stay replicated."""
-    rep, bat = replicated(self.mesh), batch_sharding(self.mesh)
+    rep, bat = replicated(self.mesh), split_along_batch(self.mesh)
     keys = jax.jit(self.keys, out_shardings=rep).trace(shaped.key)
     k_sgd, step_keys, k_next = _shaped(keys.out_info, rep)
-    act = jax.jit(self.act, out_shardings=bat).trace(
-        shaped.env_state, self.learner.policy_params(shaped), step_keys, jax.ShapeDtypeStruct((), jnp.int32, sharding=rep))
+    index = jax.ShapeDtypeStruct((), jnp.int32, sharding=rep)
+    act = jax.jit(self.act, out_shardings=bat).trace(shaped.env_state, self.learner.policy_params(shaped), step_keys, index)
     yield "act", act.lower()
     actions, extras, period = _shaped(act.out_info, bat)
     if self.reset_apart:
