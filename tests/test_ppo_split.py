@@ -74,6 +74,7 @@ def test_which_runs_split_their_update():
   assert ppo_split.wanted("on", "ppo")
   assert not ppo_split.wanted("off", "ppo")
   assert not ppo_split.wanted("on", "sac")  # SAC's update stays one program
+  assert not ppo_split.wanted("on", "ppo", devices=2)  # nor one on several devices
   assert ppo_split.wanted("auto", "ppo") == (jax.default_backend() != "cpu")
   with pytest.raises(ValueError, match="--split-update takes one of"):
     ppo_split.wanted("yes", "ppo")

@@ -95,7 +95,7 @@ def parser() -> argparse.ArgumentParser:
   p.add_argument("--split-update", choices=SPLIT_CHOICES, default=SPLIT_DEFAULT,
                  help="PPO: the training step as programs that compile side by side (the policy and the "
                       "physics; the rest of the env step; the SGD), its env steps a loop on the host; a run of "
-                      "one task in one process only (auto: where JAX's backend is not the CPU; "
+                      "one task on one device only (auto: where JAX's backend is not the CPU; "
                       "train.core.algos.ppo_split)")
   p.add_argument("--coordinator", metavar="HOST:PORT",
                  help="one process of a multi-process run (jax.distributed): process 0's address")

@@ -86,9 +86,9 @@ def _loop(t: Training, db, stop, checkpointer: Checkpointer, state, start_step: 
   plan = t.plan
   evaluate, probe = evaluator_of(t), Probe(t) if plan.probe_every else None
   try:  # the evaluations trace once the update is lowered, and compile with it and while the run trains
-    split = ppo_split.wanted(options.split_update, t.plan.algo)
+    split = ppo_split.wanted(options.split_update, t.plan.algo, t.mesh.devices.size)
     if options.split_update == "on" and not split:
-      print("note: --split-update on applies to PPO in a run of one process; this run's update stays one program",
+      print("note: --split-update on applies to PPO on one device; this run's update stays one program",
             flush=True)
     update, seconds = compile_update(t, meanwhile=lambda: ahead.start(options.compile_ahead, (evaluate, probe), state),
                                      split=split)

@@ -38,12 +38,16 @@ CHOICES = ("auto", "on", "off")  # train.run --split-update
 DEFAULT = "auto"
 
 
-def wanted(choice: str, algo: str) -> bool:
-  """Whether `--split-update choice` splits a run's update here: PPO's, in a run of one process
-  (auto: where JAX's backend is not the CPU)."""
+def wanted(choice: str, algo: str, devices: int | None = None) -> bool:
+  """Whether `--split-update choice` splits a run's update here: PPO's, on one device (default:
+  JAX's device count) of one process (auto: where JAX's backend is not the CPU). Not on several:
+  on 2 CPU devices the programs' all-gather (the curriculum's normalizer) waited 40 s for the
+  other device and XLA aborted the process (tests/test_runtime.py's run beside another worker,
+  2026-11-29); on several GPUs it is not measured."""
   if choice not in CHOICES:
     raise ValueError(f"--split-update takes one of {', '.join(CHOICES)}, got {choice!r}")
-  if algo != "ppo" or jax.process_count() > 1:
+  devices = jax.device_count() if devices is None else devices
+  if algo != "ppo" or jax.process_count() > 1 or devices > 1:
     return False
   return choice == "on" or (choice == "auto" and jax.default_backend() != "cpu")
 
