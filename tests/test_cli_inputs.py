@@ -151,3 +151,15 @@ def test_train_evaluate_refuses_what_takes_one_run_beside_several_runs(capsys, t
     # nor beside a training (a study's pack), even for one run, before anything is waited for
     _one_line_error(capsys, evaluate.main([str(tmp_path / "a"), *extra, "--await-runs"]), "drop --baseline")
   _one_line_error(capsys, evaluate.main(["--await-runs"]), "needs the RUN_DIRs")
+
+
+def test_a_resume_refuses_fixed_options_naming_those_it_takes():
+  """train.core.plan's RESUME_FREE: options of train.run, none of them fixed, all named by the refusal."""
+  from train.core.plan import RESUME_FIXED, RESUME_FREE, RunError, plan_run
+  from train.run import parser
+  dests = {a.dest for a in parser()._actions}  # noqa: SLF001
+  assert set(RESUME_FREE) <= dests and not set(RESUME_FREE) & set(RESUME_FIXED)
+  with pytest.raises(RunError) as refused:
+    plan_run(parser().parse_args(["--resume", "runs/x", "--seed", "3"]))
+  assert "drop --seed (only --steps, --db, --checkpoint-every, --keep-checkpoints, --compile-ahead and " \
+         "--split-update may be given)" in str(refused.value)

@@ -70,15 +70,21 @@ def default_preset(algo: str, library: str = DEFAULT_LIBRARY) -> str:
 # options a resumed run takes from its run.json; giving one with --resume is refused
 RESUME_FIXED = ("task", "algo", "preset", "num_envs", "seed", "set", "hp", "library", "out", "early_stop",
                 "probe_every", "milestones")
+# options a resumed run may be given anew
+RESUME_FREE = ("steps", "db", "checkpoint_every", "keep_checkpoints", "compile_ahead", "split_update")
+
+
+def _flag(name: str) -> str:
+  return f"--{name.replace('_', '-')}"
 
 
 def _plan_resume(args: argparse.Namespace) -> RunPlan:
   """The plan of a run to continue; refuses options that would change it, and finished runs."""
-  given = [f"--{n.replace('_', '-')}" for n in RESUME_FIXED if getattr(args, n) not in (None, [], False)]
+  given = [_flag(n) for n in RESUME_FIXED if getattr(args, n) not in (None, [], False)]
   if given:
+    free = [_flag(n) for n in RESUME_FREE]
     raise RunError(f"--resume continues a run with its own settings; drop {', '.join(given)} "
-                   "(only --steps, --db, --checkpoint-every, --keep-checkpoints, --compile-ahead and "
-                   "--split-update may be given)")
+                   f"(only {', '.join(free[:-1])} and {free[-1]} may be given)")
   try:
     meta = read_run_record(args.resume)
   except (FileNotFoundError, ValueError) as e:
