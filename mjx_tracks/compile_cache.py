@@ -15,18 +15,19 @@ def cache_dir() -> pathlib.Path:
 
 
 def enable() -> pathlib.Path:
-  """Turns the persistent cache on for every compilation over 1 s, and (unless
+  """Turns the persistent cache on for every compilation over 1 s, keyed by each program's content
+  however this process's tracing shared its functions (mjx_tracks.jax_private), and (unless
   MJX_TRACKS_COMPILE_LOCK=0) makes the processes sharing it compile each program once: one waits
-  while another compiles a program it needs, then loads it (mjx_tracks.jax_private); returns its
-  directory."""
+  while another compiles a program it needs, then loads it; returns its directory."""
   import jax  # noqa: PLC0415
+  from mjx_tracks import jax_private  # noqa: PLC0415
   path = cache_dir()
   path.mkdir(parents=True, exist_ok=True)
   jax.config.update("jax_compilation_cache_dir", str(path))
   jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
   jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+  jax_private.key_programs_by_content()
   if os.environ.get("MJX_TRACKS_COMPILE_LOCK", "1") != "0":
-    from mjx_tracks import jax_private  # noqa: PLC0415
     jax_private.serialize_compilations(str(path / "locks"))
   if os.environ.get("MJX_TRACKS_COMPILE_LOG"):
     log_compilations(os.environ["MJX_TRACKS_COMPILE_LOG"])

@@ -1,8 +1,10 @@
 """JAX's private compiler API, used in this one module (MJX's is in mjx_tracks.sim.mjx_private):
-a hook that makes the processes of one machine compile each program once. jax 0.10-0.11:
-`jax._src.compiler._compile_and_write_cache` (called on a persistent-cache miss, with the cache key)
-and `jax._src.compiler._cache_read` (0.11 added its `host_callbacks`); tests/test_compile_lock.py
-fails where an upgrade changes them. Where they are not as expected, nothing is hooked."""
+- a hook that makes the processes of one machine compile each program once. jax 0.10-0.11:
+  `jax._src.compiler._compile_and_write_cache` (called on a persistent-cache miss, with the cache
+  key) and `jax._src.compiler._cache_read` (0.11 added its `host_callbacks`);
+- persistent-cache keys made from a program's content: `jax._src.cache_key._hash_computation`.
+tests/test_compile_lock.py and tests/test_cache_key.py fail where an upgrade changes them. Where they
+are not as expected, nothing is hooked."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ import hashlib
 import inspect
 import logging
 import os
+import re
 import time
 
 logger = logging.getLogger("mjx_tracks.jax_private")
@@ -122,3 +125,98 @@ def serialize_compilations(lock_dir: str) -> None:
   setattr(locked, _MARK, True)
   locked.__wrapped__ = compile_and_write  # what _api checks
   compiler._compile_and_write_cache = locked  # noqa: SLF001
+
+
+# The persistent cache's key hashes a program's MLIR. A function called from several places in it is
+# one private function or several equal ones, and their names carry counters: both follow from what
+# JAX's trace caches (of bounded size) held when the program was traced, so the same program traced
+# after other programs, in another process or later in the same one, can get another key and be
+# compiled again (tests/test_env.py's Gymnasium step, after 5 other tasks' programs, 2026-11-29).
+# key_programs_by_content hashes each private function by its body instead of its name, callees
+# first: equal programs get one key however their functions were shared.
+HASH_COMPUTATION = ("hash_obj", "module")  # _hash_computation's first parameters; a third, below
+# its third parameter across JAX versions, and the value for which the module is hashed as it is
+CALLBACK_PARAMS = {"ignore_callbacks": "NO", "ignore_custom_partitioning": False}
+_KEY_MARK = "_mjx_tracks_content_key"
+_NAME = r'(?:"(?:[^"\\]|\\.)*"|[\w$.\-]+)'  # a symbol's name as MLIR prints it: bare, or quoted (@"<lambda>")
+_FUNC = re.compile(rf"^  func\.func (?:(?:public|private|nested) )?@({_NAME})")
+_SYMBOL = re.compile(rf"@({_NAME})")
+KEY_FORMAT = b"mjx_tracks content key 1\n"  # a new format never meets keys of the old one
+
+
+def program_content(text: str) -> bytes:
+  """A program's MLIR text (no debug info) as hashed for its cache key: the lines outside functions;
+  `main` with every call of a function replaced by the hash of that function's body, in which its
+  own calls are replaced the same way (names of functions dropped); and the set of every function's
+  hash (one called from nowhere included: nothing of the text is left out)."""
+  bodies, outside, name, lines = {}, [], None, []
+  for line in text.split("\n"):
+    head = _FUNC.match(line) if name is None else None
+    if head:
+      name, lines = head.group(1), [_FUNC.sub("  func.func @", line, count=1)]
+    elif name is not None:
+      lines.append(line)
+      if line == "  }":  # the function's end, at its own indentation
+        bodies[name], name = "\n".join(lines), None
+    else:
+      outside.append(line)
+  if "main" not in bodies or name is not None:
+    raise ValueError("not a module with a main function as jax lowers it")
+  digests: dict[str, str] = {}
+
+  def digest(fn: str) -> str:
+    if fn not in digests:
+      body = _SYMBOL.sub(lambda m: digest(m.group(1)) if m.group(1) in bodies else m.group(0), bodies[fn])
+      digests[fn] = "@" + hashlib.sha256(body.encode()).hexdigest()
+    return digests[fn]
+  every = "\n".join(sorted({digest(fn) for fn in bodies}))
+  return KEY_FORMAT + "\n".join([*outside, digest("main"), every]).encode()
+
+
+def _key_api():
+  """(jax._src.cache_key, the name of _hash_computation's third parameter), or None where it is not
+  as this module knows it."""
+  from jax._src import cache_key  # noqa: PLC0415
+  fn = getattr(cache_key, "_hash_computation", None)
+  if fn is None:
+    return None
+  params = tuple(inspect.signature(inspect.unwrap(fn)).parameters)
+  known = params[:2] == HASH_COMPUTATION and len(params) == 3 and params[2] in CALLBACK_PARAMS
+  return (cache_key, params[2]) if known else None
+
+
+def keys_by_content() -> bool:
+  """Whether key_programs_by_content's hook is in place in this process."""
+  from jax._src import cache_key  # noqa: PLC0415
+  return getattr(getattr(cache_key, "_hash_computation", None), _KEY_MARK, False)
+
+
+def key_programs_by_content() -> None:
+  """From now on in this process: a program's persistent-cache key hashes program_content(its MLIR
+  text) where JAX would hash its MLIR bytecode (not where the key is to keep metadata, or where
+  callbacks or custom partitioning are left out of it: JAX's own hash then)."""
+  if keys_by_content():
+    return
+  api = _key_api()
+  if api is None:
+    logger.warning("this JAX's private cache-key API is not the one mjx_tracks.jax_private knows: equal "
+                   "programs traced in other orders may be compiled again")
+    return
+  cache_key, third = api
+  original = cache_key._hash_computation  # noqa: SLF001
+  import jax  # noqa: PLC0415
+
+  def hashed(hash_obj, module, flag):
+    as_is = CALLBACK_PARAMS[third]
+    plain = getattr(flag, "name", flag) == as_is if isinstance(as_is, str) else flag is as_is
+    if not plain or jax.config.jax_compilation_cache_include_metadata_in_key:
+      return original(hash_obj, module, flag)
+    try:
+      content = program_content(module.operation.get_asm(enable_debug_info=False))
+    except ValueError:  # not laid out as this module reads it
+      return original(hash_obj, module, flag)
+    hash_obj.update(content)
+
+  setattr(hashed, _KEY_MARK, True)
+  hashed.__wrapped__ = original
+  cache_key._hash_computation = hashed  # noqa: SLF001
