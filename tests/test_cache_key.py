@@ -9,6 +9,7 @@ import inspect
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pytest
 
 from mjx_tracks import jax_private
@@ -70,6 +71,10 @@ def test_programs_that_differ_in_a_function_called_deep_down_get_different_keys(
   assert _key(base) != _key(nested(_scaled(2.5)))  # a constant two calls down
   assert _key(base) != _key(_module(lambda x: jax.jit(lambda x: _scaled(2.0)(x) - 0.5)(x) * 3.0,
                                     jax.ShapeDtypeStruct((5,), jnp.float32)))  # another shape
+  big = np.arange(5_000, dtype=np.float32)
+  other = big.copy()
+  other[-1] += 1.0  # the last of 5,000 constants (printed in full, not elided)
+  assert _key(_module(lambda x: x * jnp.asarray(big)[-4:])) != _key(_module(lambda x: x * jnp.asarray(other)[-4:]))
 
 
 def test_program_content_replaces_calls_by_their_callees_hashes_and_refuses_other_text():
