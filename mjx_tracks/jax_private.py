@@ -134,8 +134,9 @@ def serialize_compilations(lock_dir: str) -> None:
 # compiled again (tests/test_env.py's Gymnasium step, after 5 other tasks' programs, 2026-11-29).
 # key_programs_by_content hashes each private function by its body instead of its name, callees
 # first: equal programs get one key however their functions were shared.
-HASH_COMPUTATION = ("hash_obj", "module")  # _hash_computation's first parameters; a third, below
-# its third parameter across JAX versions, and the value for which the module is hashed as it is
+HASH_COMPUTATION = ("hash_obj", "module")  # _hash_computation's first two parameters
+# its third parameter (jax 0.10: ignore_callbacks, an IgnoreCallbacks; 0.11: ignore_custom_partitioning),
+# and its value where the module is hashed as it is (the only case hashed by content)
 CALLBACK_PARAMS = {"ignore_callbacks": "NO", "ignore_custom_partitioning": False}
 _KEY_MARK = "_mjx_tracks_content_key"
 _NAME = r'(?:"(?:[^"\\]|\\.)*"|[\w$.\-]+)'  # a symbol's name as MLIR prints it: bare, or quoted (@"<lambda>")
