@@ -186,6 +186,13 @@ def _key_api():
   return (cache_key, params[2]) if known else None
 
 
+def as_is(cache_key, third: str):
+  """The value of _hash_computation's third parameter (named `third`) with which JAX hashes the
+  module as it is: the one case key_programs_by_content hashes by content."""
+  value = CALLBACK_PARAMS[third]
+  return getattr(cache_key.IgnoreCallbacks, value) if isinstance(value, str) else value
+
+
 def keys_by_content() -> bool:
   """Whether key_programs_by_content's hook is in place in this process."""
   from jax._src import cache_key  # noqa: PLC0415
@@ -204,13 +211,11 @@ def key_programs_by_content() -> None:
                    "programs traced in other orders may be compiled again")
     return
   cache_key, third = api
-  original = cache_key._hash_computation  # noqa: SLF001
+  original, plain = cache_key._hash_computation, as_is(cache_key, third)  # noqa: SLF001
   import jax  # noqa: PLC0415
 
   def hashed(hash_obj, module, flag):
-    as_is = CALLBACK_PARAMS[third]
-    plain = getattr(flag, "name", flag) == as_is if isinstance(as_is, str) else flag is as_is
-    if not plain or jax.config.jax_compilation_cache_include_metadata_in_key:
+    if flag != plain or jax.config.jax_compilation_cache_include_metadata_in_key:
       return original(hash_obj, module, flag)
     try:
       content = program_content(module.operation.get_asm(enable_debug_info=False))

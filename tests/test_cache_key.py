@@ -15,20 +15,12 @@ import pytest
 from mjx_tracks import jax_private
 
 
-def _as_is():
-  """_hash_computation's third argument for a module hashed as it is."""
-  from jax._src import cache_key
-  _, third = jax_private._key_api()
-  value = jax_private.CALLBACK_PARAMS[third]
-  return getattr(cache_key.IgnoreCallbacks, value) if isinstance(value, str) else value
-
-
 def _key(module, content: bool = True) -> str:
   """The computation's part of the cache key: by content (the hook) or JAX's own hash."""
   from jax._src import cache_key
   fn = cache_key._hash_computation if content else cache_key._hash_computation.__wrapped__
   h = hashlib.sha256()
-  fn(h, module, _as_is())
+  fn(h, module, jax_private.as_is(*jax_private._key_api()))
   return h.hexdigest()
 
 
