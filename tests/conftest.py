@@ -85,7 +85,7 @@ def ppo_run(tmp_path_factory):
   import contextlib
   import fcntl
   import io
-  from helpers import HELD_OUT, TINY
+  from helpers import HELD_OUT_SET, TINY
   from train import run
   root = _session_folder(tmp_path_factory) / "ppo-run"
   out, database, said = root / "ppo", root / "db.sqlite", root / "ppo.stdout"
@@ -98,8 +98,8 @@ def ppo_run(tmp_path_factory):
       with contextlib.redirect_stdout(io.StringIO()) as printed:
         rc = run.main(["--task", "asc-inc-cog", "--preset", "cpu", "--steps", "2048", "--out", str(out),
                        "--db", str(database), "--probe-every", "2048", "--milestones", "1024",
-                       "--checkpoint-every", "0", "--keep-checkpoints", "4", "--compile-ahead", "on", *TINY, "--set",
-                       f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"])
+                       "--checkpoint-every", "0", "--keep-checkpoints", "4", "--compile-ahead", "on", *TINY,
+                       "--set", HELD_OUT_SET])
       if rc != 0:
         (root / "failed").write_text(printed.getvalue())
         pytest.fail(f"the shared PPO run exited {rc}: {printed.getvalue()[-2000:]}")

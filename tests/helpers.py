@@ -81,6 +81,7 @@ class Compilations:
 
 
 HELD_OUT = "middle"  # the ppo_run fixture's one held-out staircase (conftest.py)
+HELD_OUT_SET = f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"  # its --set
 TRAIN_TINY = ["--task", "asc-inc-cog", "--preset", "cpu", *TINY]  # the ppo_run fixture's run, less its length
 
 

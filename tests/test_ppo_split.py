@@ -9,7 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import HELD_OUT, TINY
+from helpers import HELD_OUT_SET, TINY
 
 from train.core.algos import ppo_split
 from train.core.build import build, compile_update, init_state
@@ -21,7 +21,7 @@ from train.run import parser
 def updates(tmp_path_factory):
   """(training, fused update, split update, what compiling the split one printed)."""
   args = ["--task", "asc-inc-cog", "--preset", "cpu", "--out", str(tmp_path_factory.mktemp("split") / "run"), *TINY,
-          "--set", f"evaluation.held_out=[{{name: {HELD_OUT}, tread: 0.43, riser: 0.17, steps: 4}}]"]
+          "--set", HELD_OUT_SET]
   t = build(plan_run(parser().parse_args(args)))
   said = io.StringIO()
   fused, _ = compile_update(t, stream=io.StringIO())
