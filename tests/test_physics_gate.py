@@ -57,13 +57,16 @@ def test_the_launch_bound_is_the_belts_lift_and_a_jump_off_full_speed():
   assert gate.launch_bound(robot, 0.25) == pytest.approx(1.0 * 0.25 + 1.0 / (2 * 9.81))
 
 
-def test_the_launch_check_passes_four_solver_iterations_and_fails_three():
+def test_the_launch_check_passes_four_solver_iterations_and_fails_two():
   """Full throttle at x0.8 friction into the hardest staircase, the evaluation's first 4 trials:
-  3 Newton iterations throw the chassis up beyond what its belts and speed can (0.30 m in a
-  control step; 0.40 m in one of the 4 trials, 1.18 m in 7 of 16); 4 (the default) keep it near a
-  climb's (~0.16 m)."""
+  2 Newton iterations throw the chassis up beyond what its belts and speed can (0.301 m in a control
+  step; 3 of these 4 trials, up to 2.5 m, and 27 of 32); 4 (the default) keep it near a climb's
+  (0.25 m at most here, 0.23 m in 32 trials). 3 iterations fail the gate's 32 trials (12 of 32 above,
+  on an AMD EPYC CPU, 2026-11-29; 17 of 32 on the CPU of 2026-11-27) but a trial's rise is chaotic
+  (it changes with the CPU and the batch's size): 4 trials of them passed on the AMD CPU, so this
+  test drives 2 (docs/benchmarks.md, "The gate's launch check")."""
   low = ("hardest+friction-low",)
   good = gate.launch_check(gate.physics_of([]), scenes=low, trials=4)
-  bad = gate.launch_check(gate.physics_of(["physics.solver_iterations=3"]), scenes=low, trials=4)
-  assert good[0].ok and good[0].value < 0.25
-  assert not bad[0].ok and bad[0].value > 0.35
+  bad = gate.launch_check(gate.physics_of(["physics.solver_iterations=2"]), scenes=low, trials=4)
+  assert good[0].ok and good[0].value > 0.05  # m: the climb lifts the chassis, within the bound
+  assert not bad[0].ok and bad[0].value > 0.5
