@@ -29,10 +29,11 @@ def _xla_accepts(flags: str) -> bool:
 
 
 # Each operation's location (debug info, never part of a program's cache key) is its innermost frame
-# in the project's code, not the whole Python traceback: tracing, lowering and compiling one
-# environment step (asc-inc-cog, nav; 2026-11-29, this file's XLA flags, 2 cores) took 34.6-42.7 s
-# of CPU in 5 runs against 39.9-48.8 s with whole tracebacks (median -7 %). The workers and the
-# subprocesses the tests start inherit it.
+# in the project's code, not the whole Python traceback: less to build while lowering and less for
+# XLA to carry. nav's environment step (2026-11-29): its MLIR with debug info 2.64 MB instead of
+# 3.17 MB, the HLO handed to XLA 2.11 MB instead of 2.28 MB. (The CPU seconds of lowering and
+# compiling asc-inc-cog's and nav's steps, 5 processes each way: 34.6-42.7 s against 39.9-48.8 s,
+# within the noise of the machine they were measured on.) Workers and subprocesses inherit it.
 os.environ.setdefault("JAX_INCLUDE_FULL_TRACEBACKS_IN_LOCATIONS", "false")
 
 if "xla_backend_optimization_level" not in os.environ.get("XLA_FLAGS", ""):
@@ -52,8 +53,8 @@ compile_cache.enable()
 # full collection walks every object the process holds (a test worker holds more with each program it
 # traces). The modules imported by now are moved out of its reach (they are never garbage), and the
 # first generation collects after 10,000 new objects instead of 700, so fewer survive into the older
-# ones. A cold suite, 2 cores, before: ~43 s of each worker's ~720 s in the collector, 36-47 full
-# collections of ~0.8 s each (2026-11-29).
+# ones. A cold suite, 2 cores (2026-11-29): each worker's full collections 10-12 instead of 36-47
+# (~0.8 s each), its seconds in the collector 25-28 instead of 40-43 (of ~720-750 s of CPU).
 gc.collect()
 gc.freeze()
 gc.set_threshold(10_000, 10, 10)

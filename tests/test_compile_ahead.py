@@ -38,8 +38,8 @@ def _first_use_compiles_nothing_large_and_reports_the_same(make, use, example):
 
 
 def test_the_probe_and_a_programs_probe_compiled_ahead(tiny):
-  """A run's probe of 3 trials: the program of tests/test_task_pack.py's evaluation of that run's
-  task, 3 trials (one compilation in the suite: the other loads it from the persistent cache)."""
+  """The run's probe has 3 trials: it is then the program of tests/test_task_pack.py's evaluation of
+  a run of this task (3 trials), compiled once in the suite and loaded from the cache the other time."""
   t, states = tiny
   one = run_slice(states, 0)
   want, got = _first_use_compiles_nothing_large_and_reports_the_same(lambda: Probe(t, trials=3), lambda p: p(one), one)
