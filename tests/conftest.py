@@ -28,14 +28,6 @@ def _xla_accepts(flags: str) -> bool:
   return probe.returncode == 0
 
 
-# Each operation's location (debug info, never part of a program's cache key) is its innermost frame
-# in the project's code, not the whole Python traceback: less to build while lowering and less for
-# XLA to carry. nav's environment step (2026-11-29): its MLIR with debug info 2.64 MB instead of
-# 3.17 MB, the HLO handed to XLA 2.11 MB instead of 2.28 MB. (The CPU seconds of lowering and
-# compiling asc-inc-cog's and nav's steps, 5 processes each way: 34.6-42.7 s against 39.9-48.8 s,
-# within the noise of the machine they were measured on.) Workers and subprocesses inherit it.
-os.environ.setdefault("JAX_INCLUDE_FULL_TRACEBACKS_IN_LOCATIONS", "false")
-
 if "xla_backend_optimization_level" not in os.environ.get("XLA_FLAGS", ""):
   given = os.environ.get("XLA_FLAGS", "")
   wanted = f"{given} {' '.join(FAST_COMPILE)}".strip()
