@@ -193,6 +193,22 @@ def as_is(cache_key, third: str):
   return getattr(cache_key.IgnoreCallbacks, value) if isinstance(value, str) else value
 
 
+def computation_key(module, by_content: bool = True) -> str:
+  """The computation's part of a persistent-cache key of `module` (an MLIR module as JAX lowers it),
+  hex: by content (key_programs_by_content's hook, which must be in place) or JAX's own hash."""
+  api = _key_api()
+  if api is None:
+    raise RuntimeError("this JAX's private cache-key API is not the one mjx_tracks.jax_private knows")
+  cache_key, third = api
+  if by_content and not keys_by_content():
+    raise RuntimeError("keys by content are not switched on (key_programs_by_content)")
+  fn = cache_key._hash_computation  # noqa: SLF001
+  fn = fn if by_content else getattr(fn, "__wrapped__", fn)
+  h = hashlib.sha256()
+  fn(h, module, as_is(cache_key, third))
+  return h.hexdigest()
+
+
 def keys_by_content() -> bool:
   """Whether key_programs_by_content's hook is in place in this process."""
   from jax._src import cache_key  # noqa: PLC0415

@@ -8,7 +8,6 @@ Usage: python scripts/gpu/cache_key_check.py OUT"""
 from __future__ import annotations
 
 import datetime
-import hashlib
 import inspect
 import json
 import os
@@ -40,13 +39,7 @@ def main() -> None:
   from mjx_tracks import compile_cache, jax_private  # noqa: PLC0415
   from mjx_tracks.envs.wrappers import batched_env  # noqa: PLC0415
   compile_cache.enable()
-  flag = jax_private.as_is(*jax_private._key_api())  # noqa: SLF001
-
-  def key(module, content=True):
-    fn = cache_key._hash_computation if content else cache_key._hash_computation.__wrapped__  # noqa: SLF001
-    h = hashlib.sha256()
-    fn(h, module, flag)
-    return h.hexdigest()
+  key = jax_private.computation_key
 
   x = jax.ShapeDtypeStruct((4,), jnp.float32)
   first, second = _scaled(2.0), _scaled(2.0)
